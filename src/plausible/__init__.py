@@ -1,0 +1,18 @@
+"""plausible: physically plausible reflection models of the Phong family.
+
+Evaluate, sample, verify, fit and render the Ashikhmin-Shirley anisotropic
+Phong BRDF, the Modified Phong BRDF, the reciprocal Phong/Blinn models and
+albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
+
+>>> import plausible
+>>> m = plausible.make("modified-phong", kd=0.5, ks=0.5, n=10)
+>>> round(float(m.eval([0, 0, 1], [0, 0, 1])), 5)   # 7 / (2 pi)
+1.11408
+"""
+
+from .bxdf import BxDF, Sample
+from .registry import info, make, names, register
+
+__version__ = "0.1.0"
+
+__all__ = ["BxDF", "Sample", "info", "make", "names", "register", "__version__"]

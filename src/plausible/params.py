@@ -1,0 +1,105 @@
+"""Parameter specifications and validation.
+
+Every model declares its parameters as :class:`Param` objects; the registry, the
+command line (``plausible models``), the Mitsuba plugins and the tests read them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Param:
+    """One model parameter.
+
+    ``kind`` is ``"scalar"`` (a float), ``"color"`` (a float or a trailing
+    channel array, e.g. RGB) or ``"choice"`` (one of ``choices``).  ``lo`` and
+    ``hi`` bound the value (inclusive); ``extremes`` lists values that the
+    ``--all`` checks and the tests try besides the default.
+    """
+
+    name: str
+    default: Any
+    lo: float = -math.inf
+    hi: float = math.inf
+    kind: str = "scalar"
+    doc: str = ""
+    extremes: tuple = ()
+    choices: tuple = ()
+    integer: bool = False
+
+    def range_text(self) -> str:
+        if self.kind == "choice":
+            return "{" + ", ".join(map(str, self.choices)) + "}"
+        lo = "-inf" if self.lo == -math.inf else f"{self.lo:g}"
+        hi = "inf" if self.hi == math.inf else f"{self.hi:g}"
+        return f"[{lo}, {hi}]"
+
+    def validate(self, value, owner: str = "model"):
+        """Return the value converted (float, or float64 array for colours).
+
+        Raises :class:`ValueError` naming the parameter and its allowed range.
+        """
+        where = f"{owner}: parameter '{self.name}'"
+        if self.kind == "choice":
+            if value not in self.choices:
+                raise ValueError(f"{where} must be one of {self.range_text()}, got {value!r}")
+            return value
+        if self.kind == "color":
+            try:
+                arr = np.asarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(f"{where} must be a number or a list of numbers in "
+                                 f"{self.range_text()}, got {value!r}") from None
+            if arr.ndim > 1 or arr.size == 0:
+                raise ValueError(f"{where} must be a scalar or a 1-D channel array "
+                                 f"(e.g. RGB), got shape {arr.shape}")
+            if not np.all(np.isfinite(arr)) or np.any(arr < self.lo) or np.any(arr > self.hi):
+                raise ValueError(f"{where} must lie in {self.range_text()}, got {value!r}")
+            return float(arr) if arr.ndim == 0 else arr
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{where} must be a number in {self.range_text()}, "
+                             f"got {value!r}") from None
+        if not math.isfinite(x) or x < self.lo or x > self.hi:
+            raise ValueError(f"{where} must lie in {self.range_text()}, got {value!r}")
+        if self.integer:
+            if x != int(x):
+                raise ValueError(f"{where} must be an integer in {self.range_text()}, got {value!r}")
+            return int(x)
+        return x
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    """A registry entry: everything the CLI, the plugins and the tests need."""
+
+    name: str
+    cls: type
+    params: tuple
+    description: str
+    reciprocal: bool = True
+    energy_conserving: bool = True
+    references: tuple = field(default_factory=tuple)
+
+    def param(self, name: str) -> Param:
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+
+def parse_value(text: str):
+    """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour) or a word."""
+    parts = [t.strip() for t in text.split(",")]
+    try:
+        nums = [float(t) for t in parts]
+    except ValueError:
+        return text
+    return nums[0] if len(nums) == 1 else nums

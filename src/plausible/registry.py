@@ -1,0 +1,64 @@
+"""The model registry: one entry per model, read by the CLI, the plugins and the tests."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from .params import ModelInfo
+
+_REGISTRY: dict[str, ModelInfo] = {}
+_LOADED = False
+
+
+def register(name: str, description: str, *, reciprocal: bool = True,
+             energy_conserving: bool = True, references: tuple = ()):
+    """Class decorator: add a :class:`~plausible.bxdf.BxDF` subclass to the registry.
+
+    ``reciprocal`` / ``energy_conserving`` state what the model *claims*; the
+    registry-wide tests assert that :func:`plausible.check` agrees.
+    """
+
+    def deco(cls):
+        if name in _REGISTRY and _REGISTRY[name].cls is not cls:
+            raise ValueError(f"model name {name!r} registered twice")
+        info = ModelInfo(name=name, cls=cls, params=tuple(cls.PARAMS), description=description,
+                         reciprocal=reciprocal, energy_conserving=energy_conserving,
+                         references=tuple(references))
+        cls.info = info
+        _REGISTRY[name] = info
+        return cls
+
+    return deco
+
+
+def _load():
+    global _LOADED
+    if _LOADED:
+        return
+    from . import models
+
+    for mod in pkgutil.iter_modules(models.__path__):
+        importlib.import_module(f"{models.__name__}.{mod.name}")
+    _LOADED = True
+
+
+def names() -> list[str]:
+    """Names of every registered model, in registration order."""
+    _load()
+    return list(_REGISTRY)
+
+
+def info(name: str) -> ModelInfo:
+    """The registry entry of ``name`` (ValueError listing the names if unknown)."""
+    _load()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise ValueError(f"unknown model {name!r}; registered models: "
+                         f"{', '.join(sorted(_REGISTRY))}") from None
+
+
+def make(name: str, **params):
+    """Build the registered model ``name`` with ``params`` (defaults for the rest)."""
+    return info(name).cls(**params)

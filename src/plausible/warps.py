@@ -1,0 +1,148 @@
+"""Sampling warps, kept apart from the models (as in pbrt-v4).
+
+Each warp maps uniform numbers ``u1, u2`` in ``[0, 1)`` to a direction and comes
+with its density (per unit solid angle).  Written against an ops namespace, so
+the same code runs on NumPy and on Dr.Jit.
+"""
+
+from __future__ import annotations
+
+from . import vec
+from .ops import INV_PI, PI
+
+
+def cosine_hemisphere(ops, u1, u2):
+    """Cosine-weighted direction about ``z``: ``cos(theta) = sqrt(1 - u1)``.
+
+    Density :func:`cosine_hemisphere_pdf`, ``cos(theta) / pi``.
+    """
+    r = ops.sqrt(u1)
+    phi = 2.0 * PI * u2
+    z = ops.sqrt(ops.maximum(1.0 - u1, 0.0))
+    return (r * ops.cos(phi), r * ops.sin(phi), z)
+
+
+def cosine_hemisphere_pdf(ops, w):
+    return ops.maximum(w[2], 0.0) * INV_PI
+
+
+def power_cosine_lobe(ops, n, u1, u2):
+    """Direction about ``z`` with density ``(n + 1) / (2 pi) cos^n(theta)``.
+
+    Inverse CDF: ``cos(theta) = u1^(1 / (n + 1))``.  ``n = 0`` gives the uniform
+    hemisphere.
+    """
+    c = ops.power(u1, 1.0 / (n + 1.0))
+    s = ops.sqrt(ops.maximum(1.0 - c * c, 0.0))
+    phi = 2.0 * PI * u2
+    return (s * ops.cos(phi), s * ops.sin(phi), c)
+
+
+def power_cosine_lobe_pdf(ops, n, cos_theta):
+    """``(n + 1) / (2 pi) cos^n(theta)`` for ``cos(theta) > 0``, else zero."""
+    c = ops.maximum(cos_theta, 0.0)
+    return ops.where(cos_theta > 0, (n + 1.0) / (2.0 * PI) * ops.power(c, n), 0.0)
+
+
+def power_cosine_lobe_about(ops, axis, n, u1, u2):
+    """:func:`power_cosine_lobe` rotated so that its axis is the unit vector ``axis``."""
+    local = power_cosine_lobe(ops, n, u1, u2)
+    s, t = vec.frame(ops, axis)
+    return vec.to_world(local, s, t, axis)
+
+
+def pow_cos_from_sin2(ops, sin2, e):
+    """``cos(theta)^e`` computed from ``sin^2(theta)`` as ``exp(e/2 log1p(-sin^2))``.
+
+    Accurate near the pole, where ``cos(theta)`` rounds to 1 and a direct power of
+    it loses every digit of the lobe's shape for exponents of 10^4 and more.
+    ``sin2 >= 1`` (the horizon) gives 0, or 1 when ``e == 0``.
+    """
+    inside = sin2 < 1.0
+    s = ops.where(inside, ops.maximum(sin2, 0.0), 0.0)
+    val = ops.exp(0.5 * e * ops.log1p(-s))
+    return ops.where(inside, val, ops.where(e == 0, 1.0, 0.0))
+
+
+def anisotropic_exponent(ops, hx, hy, nu, nv):
+    """``nu cos^2(phi) + nv sin^2(phi)`` of the half vector, without trigonometry.
+
+    Equals ``(nu hx^2 + nv hy^2) / (1 - hz^2)`` (Ashikhmin & Shirley 2000, tech.
+    report eq. 16, journal eq. 4).  At the pole (``hx = hy = 0``) the ratio is
+    0/0; any value in ``[min(nu, nv), max(nu, nv)]`` is a valid limit because it
+    multiplies ``log(hz) = 0`` there; ``nu`` is returned.
+    """
+    s = hx * hx + hy * hy
+    pos = s > 0
+    return ops.where(pos, (nu * hx * hx + nv * hy * hy) / ops.where(pos, s, 1.0), nu)
+
+
+def anisotropic_half_vector(ops, nu, nv, u1, u2):
+    """Half vector with density ``p_h(h) = sqrt((nu+1)(nv+1))/(2 pi) (n.h)^(nu cos^2 phi + nv sin^2 phi)``.
+
+    Ashikhmin & Shirley 2000 (journal eqs. 6, 9, 10; tech. report eqs. 5, 19, 20).
+    ``phi = atan(sqrt((nu+1)/(nv+1)) tan(pi xi / 2))`` in the first quadrant,
+    computed without ``atan``/``tan``: with ``(c, s) = (cos, sin)(pi xi / 2)``,
+    ``cos(phi), sin(phi) = (c, a s) / sqrt(c^2 + a^2 s^2)``.  ``u1`` is split in
+    four quarters, one per quadrant; odd quadrants use the mirrored argument
+    ``1 - xi`` so that ``phi`` is a continuous, monotone function of ``u1`` over
+    ``[0, 2 pi)`` (stratification is preserved; the paper's ``1 - 4(0.5 - u1)``
+    gives the same density but a discontinuous map).  Then
+    ``cos(theta) = (1 - u2)^(1 / (nu cos^2 phi + nv sin^2 phi + 1))``.
+    """
+    a = ops.sqrt((nu + 1.0) / (nv + 1.0))
+    t = 4.0 * u1
+    q1 = (t >= 1.0) & (t < 2.0)
+    q2 = (t >= 2.0) & (t < 3.0)
+    q3 = t >= 3.0
+    frac = t - ops.where(q3, 3.0, ops.where(q2, 2.0, ops.where(q1, 1.0, 0.0)))
+    odd = q1 | q3
+    xi = ops.where(odd, 1.0 - frac, frac)
+    ang = 0.5 * PI * ops.minimum(ops.maximum(xi, 0.0), 1.0)
+    c = ops.cos(ang)
+    s = a * ops.sin(ang)
+    inv = 1.0 / ops.sqrt(c * c + s * s)
+    cp = c * inv
+    sp = s * inv
+    # Quadrant signs: q0 (+,+), q1 (-,+), q2 (-,-), q3 (+,-).
+    cp = ops.where(q1 | q2, -cp, cp)
+    sp = ops.where(q2 | q3, -sp, sp)
+    e = nu * cp * cp + nv * sp * sp
+    cos_t = ops.power(ops.maximum(1.0 - u2, 0.0), 1.0 / (e + 1.0))
+    sin_t = ops.sqrt(ops.maximum(1.0 - cos_t * cos_t, 0.0))
+    return (sin_t * cp, sin_t * sp, cos_t)
+
+
+def anisotropic_half_vector_pdf(ops, nu, nv, h):
+    """``p_h(h)`` of :func:`anisotropic_half_vector` (journal eq. 6), zero for ``h.z <= 0``."""
+    e = anisotropic_exponent(ops, h[0], h[1], nu, nv)
+    lobe = pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], e)
+    norm = ops.sqrt((nu + 1.0) * (nv + 1.0)) / (2.0 * PI)
+    return ops.where(h[2] > 0, norm * lobe, 0.0)
+
+
+def reflected_half_vector(ops, wi, nu, nv, u1, u2):
+    """``wo = -wi + 2 (wi.h) h`` with ``h`` from :func:`anisotropic_half_vector`
+    (journal eq. 7).  ``nu == nv == n`` samples the Blinn lobe ``(n.h)^n``."""
+    h = anisotropic_half_vector(ops, nu, nv, u1, u2)
+    return vec.reflect(wi, h)
+
+
+def reflected_half_vector_pdf(ops, wi, wo, nu, nv):
+    """Density of :func:`reflected_half_vector`: ``p_h(h) / (4 (wi.h))``.
+
+    Journal version eq. 8.  (The technical report's eq. 18 prints the fraction
+    inverted; the journal version and the change of measure ``d omega_o =
+    4 (wi.h) d omega_h`` agree on this form.)
+    """
+    h = vec.half_vector(ops, wi, wo)
+    kh = vec.dot(wi, h)
+    ph = anisotropic_half_vector_pdf(ops, nu, nv, h)
+    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
+    return ops.where(ok, ph / (4.0 * ops.where(ok, kh, 1.0)), 0.0)
+
+
+def mixture(ops, choose_a, a, b):
+    """Component-wise select between two sampled directions."""
+    return (ops.where(choose_a, a[0], b[0]), ops.where(choose_a, a[1], b[1]),
+            ops.where(choose_a, a[2], b[2]))
