@@ -10,9 +10,12 @@ albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
 1.11408
 """
 
+from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_albedo, reciprocity,
+                       sampling_consistency)
 from .bxdf import BxDF, Sample
 from .registry import info, make, names, register
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "info", "make", "names", "register", "__version__"]
+__all__ = ["BxDF", "Sample", "albedo", "albedo_curve", "check", "chi2", "energy", "hemispherical_albedo",
+           "info", "make", "names", "reciprocity", "register", "sampling_consistency", "__version__"]

@@ -1,0 +1,162 @@
+"""Directional and hemispherical albedo.
+
+The directional albedo ``a(wi) = int f(wi, wo) cos(theta_o) d omega_o`` is
+computed by deterministic quadrature (:mod:`plausible.analysis.quadrature`):
+a tensor Gauss-Legendre rule on panels graded toward the lobe, evaluated at two
+orders; the difference is returned as the error bound.  Accurate to better than
+1e-4 absolute for every registered model, exponents up to 10^4 and incidence up
+to 89.9 degrees (tested against closed forms and against Monte Carlo with the
+model's own sampler).  It uses only the model contract (``eval`` and the
+optional ``peak_directions`` hint).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .quadrature import hemisphere_grid
+
+
+@dataclass(frozen=True)
+class AlbedoResult:
+    """``value`` (float, or per-channel array) and ``error``, an estimated bound
+    on its absolute error (same shape)."""
+
+    value: np.ndarray | float
+    error: np.ndarray | float
+
+    def __float__(self):
+        return float(np.mean(self.value))
+
+
+def direction(theta: float, phi: float = 0.0) -> np.ndarray:
+    """Unit vector with polar angle ``theta`` and azimuth ``phi`` (radians)."""
+    s = math.sin(theta)
+    return np.array([s * math.cos(phi), s * math.sin(phi), math.cos(theta)])
+
+
+def _integrate_once(model, wi, fn_values, m, levels, refine):
+    grid = hemisphere_grid(wi, model.peak_directions(wi), m=m, levels=levels, refine=refine)
+    vals = fn_values(grid.wo)
+    w = grid.weight
+    if vals.ndim == w.ndim + 1:
+        w = w[..., None]
+    return np.sum(vals * w, axis=(0, 1))
+
+
+def _integrate(model, wi, fn_values, m, m_low, levels, tol):
+    """Integrate at orders ``m`` and ``m_low``; while the two disagree by more
+    than ``tol`` (a kink or a jump inside a panel, e.g. the truncation of a
+    ``cos^0`` lobe), refine the uniform floor of panels 4x (at most twice)."""
+    refine = 1
+    while True:
+        hi = _integrate_once(model, wi, fn_values, m, levels, refine)
+        lo = _integrate_once(model, wi, fn_values, m_low, levels, refine)
+        err = np.abs(hi - lo) + 1e-13 * np.abs(hi)
+        if np.all(err <= tol) or refine >= 16:
+            return hi, err
+        refine *= 4
+
+
+def albedo(model, wi, *, m: int = 12, m_low: int = 8, levels: int = 13,
+           tol: float = 2e-5) -> AlbedoResult:
+    """Directional albedo ``a(wi) = int f(wi, wo) cos(theta_o) d omega_o``.
+
+    ``wi`` is a direction of shape (3,) (normalised here).  Returns
+    :class:`AlbedoResult` with the ``m``-point estimate and the difference to
+    the ``m_low``-point rule as its error bound.  Zero for ``wi`` below the horizon.
+    """
+    wi = np.asarray(wi, dtype=np.float64)
+    if wi.shape != (3,):
+        raise ValueError(f"wi must be one direction of shape (3,), got {wi.shape}")
+    nrm = np.linalg.norm(wi)
+    if not np.isfinite(nrm) or nrm == 0:
+        raise ValueError("wi must be a finite, non-zero vector")
+    wi = wi / nrm
+    if wi[2] <= 0:
+        z = np.zeros(model.channels) if model.channels else 0.0
+        return AlbedoResult(z, z)
+
+    def fcos(wo):
+        f = model.eval(wi, wo)
+        c = wo[..., 2]
+        return f * (c[..., None] if f.ndim == c.ndim + 1 else c)
+
+    hi, err = _integrate(model, wi, fcos, m, m_low, levels, tol)
+    if np.ndim(hi) == 0:
+        return AlbedoResult(float(hi), float(err))
+    return AlbedoResult(hi, err)
+
+
+def pdf_integral(model, wi, *, m: int = 12, m_low: int = 8, levels: int = 13,
+                 tol: float = 2e-5) -> AlbedoResult:
+    """``int pdf(wi, wo) d omega_o`` over the upper hemisphere (pdf is zero below)."""
+    wi = np.asarray(wi, dtype=np.float64)
+    wi = wi / np.linalg.norm(wi)
+    hi, err = _integrate(model, wi, lambda wo: model.pdf(wi, wo), m, m_low, levels, tol)
+    return AlbedoResult(float(hi), float(err))
+
+
+def albedo_curve(model, thetas, phi: float = 0.0, **kw) -> AlbedoResult:
+    """Directional albedo at polar angles ``thetas`` (radians) and azimuth ``phi``.
+
+    Returns an :class:`AlbedoResult` whose ``value``/``error`` have shape
+    ``(len(thetas),)`` (plus a channel axis for colour models).
+    """
+    thetas = np.atleast_1d(np.asarray(thetas, dtype=np.float64))
+    if np.any(~np.isfinite(thetas)) or np.any(thetas < 0) or np.any(thetas > math.pi / 2):
+        raise ValueError("thetas must lie in [0, pi/2] radians")
+    res = [albedo(model, direction(t, phi), **kw) for t in thetas]
+    return AlbedoResult(np.array([r.value for r in res]), np.array([r.error for r in res]))
+
+
+def is_isotropic(model, trials: int = 16, seed: int = 7) -> bool:
+    """Probe the contract: does rotating both directions about the normal leave ``f``
+    unchanged (relative 1e-9) on random pairs?"""
+    rng = np.random.default_rng(seed)
+    wi = _random_upper(rng, trials)
+    wo = _random_upper(rng, trials)
+    a = rng.uniform(0, 2 * math.pi, trials)
+    c, s = np.cos(a), np.sin(a)
+
+    def rot(w):
+        return np.stack([c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1], w[:, 2]], axis=-1)
+
+    f1 = model.eval(wi, wo)
+    f2 = model.eval(rot(wi), rot(wo))
+    scale = np.maximum(np.abs(f1), np.abs(f2)) + 1e-300
+    return bool(np.all(np.abs(f1 - f2) <= 1e-9 * scale + 1e-14))
+
+
+def _random_upper(rng, n):
+    z = rng.uniform(0.05, 1.0, n)
+    p = rng.uniform(0, 2 * math.pi, n)
+    s = np.sqrt(1 - z * z)
+    return np.stack([s * np.cos(p), s * np.sin(p), z], axis=-1)
+
+
+def hemispherical_albedo(model, *, n_theta: int = 16, n_phi: int | None = None) -> AlbedoResult:
+    """Cosine-weighted average of the directional albedo over the hemisphere,
+    ``(1/pi) int a(wi) cos(theta_i) d omega_i = 2 int_0^1 a(mu) mu d mu`` (isotropic),
+    by Gauss-Legendre in ``mu = cos(theta_i)`` (and in azimuth for anisotropic models)."""
+    from .quadrature import gauss_legendre
+
+    x, w = gauss_legendre(n_theta)
+    mu = 0.5 * (x + 1.0)
+    wmu = 0.5 * w * 2.0 * mu  # 2 mu d mu on [0, 1]
+    if n_phi is None:
+        n_phi = 1 if is_isotropic(model) else 8
+    phis = (np.arange(n_phi) + 0.5) * (2 * math.pi / n_phi)
+    tot = 0.0
+    err = 0.0
+    for ph in phis:
+        for m_, wm in zip(mu, wmu):
+            r = albedo(model, direction(math.acos(m_), ph))
+            tot = tot + wm * np.asarray(r.value) / n_phi
+            err = err + wm * np.asarray(r.error) / n_phi
+    if np.ndim(tot) == 0:
+        return AlbedoResult(float(tot), float(err))
+    return AlbedoResult(tot, err)

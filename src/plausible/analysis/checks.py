@@ -1,0 +1,198 @@
+"""Plausibility checks on the model contract: reciprocity, energy, sampling.
+
+Each check returns a :class:`PropertyResult` holding the figure measured, the
+bound it is compared with, the verdict and the worst case, so a failure says
+exactly where the model breaks.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .albedo import albedo, direction, is_isotropic, pdf_integral
+
+#: Incidence angles (degrees) of the default energy grid: dense toward grazing.
+ENERGY_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9)
+#: Azimuths (degrees) added for anisotropic models.
+ENERGY_PHIS = (0, 22.5, 45, 67.5, 90, 135)
+
+
+@dataclass
+class PropertyResult:
+    """One verified property: ``figure`` compared with ``bound``."""
+
+    name: str
+    passed: bool
+    figure: float
+    bound: str
+    worst: dict = field(default_factory=dict)
+    details: dict = field(default_factory=dict)
+
+    def to_dict(self):
+        return _jsonable(asdict(self))
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, (np.floating, float)):
+        v = float(x)
+        return v if math.isfinite(v) else str(v)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def stratified_directions(n_theta: int, n_phi: int, rng, grazing: bool = True) -> np.ndarray:
+    """One random direction in each of ``n_theta x n_phi`` strata of equal
+    projected solid angle (``cos^2(theta)`` and ``phi`` uniform), plus, if
+    ``grazing``, a ring of directions within 0.1 degree of the horizon."""
+    i, j = np.meshgrid(np.arange(n_theta), np.arange(n_phi), indexing="ij")
+    a = (i + rng.random(i.shape)) / n_theta
+    b = (j + rng.random(j.shape)) / n_phi
+    z = np.sqrt(1.0 - a).ravel()
+    phi = 2 * math.pi * b.ravel()
+    if grazing:
+        zg = np.cos(np.radians(90 - rng.uniform(0.001, 0.1, n_phi)))
+        z = np.concatenate([z, zg])
+        phi = np.concatenate([phi, 2 * math.pi * (np.arange(n_phi) + rng.random(n_phi)) / n_phi])
+    s = np.sqrt(np.maximum(1 - z * z, 0))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+
+
+def reciprocity(model, *, n_theta: int = 12, n_phi: int = 24, tol: float = 1e-9,
+                seed: int = 1) -> PropertyResult:
+    """Max relative asymmetry ``|f(a,b) - f(b,a)| / max(|f(a,b)|, |f(b,a)|)`` over all
+    pairs of stratified directions (Helmholtz reciprocity).  Values below
+    ``1e-12`` of the largest ``f`` seen are compared absolutely to that floor."""
+    rng = np.random.default_rng(seed)
+    d = stratified_directions(n_theta, n_phi, rng)
+    a = np.repeat(d, len(d), axis=0)
+    b = np.tile(d, (len(d), 1))
+    f1 = model.eval(a, b)
+    f2 = model.eval(b, a)
+    if f1.ndim > 1:
+        f1, f2 = f1.max(axis=-1), f2.max(axis=-1)
+    floor = 1e-12 * max(float(np.max(np.abs(f1))), 1e-300)
+    rel = np.abs(f1 - f2) / np.maximum(np.maximum(np.abs(f1), np.abs(f2)), floor)
+    rel = np.where(np.isfinite(rel), rel, np.inf)
+    k = int(np.argmax(rel))
+    worst = dict(wi=a[k], wo=b[k], f_wi_wo=f1[k], f_wo_wi=f2[k],
+                 theta_i_deg=math.degrees(math.acos(a[k][2])), theta_o_deg=math.degrees(math.acos(b[k][2])))
+    fig = float(rel[k])
+    return PropertyResult("reciprocity", fig <= tol, fig, f"<= {tol:g} (relative asymmetry)", worst,
+                          dict(pairs=len(a)))
+
+
+def energy_directions(model, thetas_deg=ENERGY_THETAS, phis_deg=None):
+    if phis_deg is None:
+        phis_deg = (0.0,) if is_isotropic(model) else ENERGY_PHIS
+    return [(t, p) for p in phis_deg for t in thetas_deg]
+
+
+def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
+           progress=None) -> PropertyResult:
+    """Max directional albedo over a grid of incidence directions (azimuths too
+    for anisotropic models); passes when ``max a <= 1 + tol``.  ``tol`` matches the
+    integrator's accuracy target; each albedo's own error estimate is reported."""
+    dirs = energy_directions(model, thetas_deg, phis_deg)
+    best = (-math.inf, None, None)
+    curve = []
+    for t, p in dirs:
+        r = albedo(model, direction(math.radians(t), math.radians(p)))
+        v = float(np.max(r.value))
+        e = float(np.max(r.error))
+        curve.append((t, p, v, e))
+        if v > best[0]:
+            best = (v, (t, p), e)
+        if progress:
+            progress()
+    fig, (t, p), e = best
+    ok = fig <= 1.0 + tol
+    return PropertyResult("energy", ok, fig, f"<= 1 + {tol:g} (max directional albedo)",
+                          dict(theta_i_deg=t, phi_i_deg=p, albedo=fig, error=e),
+                          dict(grid=[dict(theta_deg=a, phi_deg=b, albedo=c, error=d) for a, b, c, d in curve],
+                               onset_deg=next((a for a, b, c, d in curve if c > 1 + tol), None)))
+
+
+def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 45),
+                         n_samples: int = 50_000, seed: int = 3, tol: float = 1e-6,
+                         sigmas: float = 5.0, progress=None) -> PropertyResult:
+    """Agreement of ``sample`` with ``eval`` and ``pdf`` at several incidences:
+
+    * ``weight == eval * cos / pdf`` (max relative error),
+    * ``pdf(wi, sampled wo) == returned pdf`` (max relative error),
+    * the fraction of invalid samples (zero weight) and the pdf's integral over
+      the hemisphere: ``int pdf <= 1`` and ``int pdf == 1 - invalid fraction``
+      within ``sigmas`` binomial standard deviations,
+    * Monte Carlo albedo (mean weight) against the deterministic albedo, within
+      ``sigmas`` standard errors (a second, independent method).
+    """
+    rng = np.random.default_rng(seed)
+    worst = {}
+    figs = dict(weight_rel_err=0.0, pdf_rel_err=0.0, max_pdf_integral=0.0, max_invalid_fraction=0.0,
+                max_invalid_mismatch_sigma=0.0, max_albedo_mismatch_sigma=0.0)
+    ok = True
+    problems = []
+    if is_isotropic(model):
+        phis_deg = (0,)
+    for p in phis_deg:
+        for t in thetas_deg:
+            wi = direction(math.radians(t), math.radians(p))
+            u = rng.random((n_samples, 3))
+            s = model.sample(wi, u)
+            valid = s.pdf > 0
+            f = model.eval(wi, s.wo)
+            cos = np.maximum(s.wo[:, 2], 0)
+            expect = np.where(valid[:, None] if f.ndim > 1 else valid,
+                              f * ((cos / np.where(valid, s.pdf, 1))[:, None] if f.ndim > 1 else cos / np.where(valid, s.pdf, 1)), 0)
+            werr = np.max(np.abs(s.weight - expect) / np.maximum(np.abs(expect), 1e-12))
+            pdf2 = model.pdf(wi, s.wo)
+            perr = np.max(np.abs(pdf2 - s.pdf) / np.maximum(np.abs(s.pdf), 1e-12))
+            bad_nonfinite = not (np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.pdf)))
+            inv = 1.0 - valid.mean()
+            pint = pdf_integral(model, wi)
+            sig_inv = math.sqrt(max(inv * (1 - inv), 1.0 / n_samples) / n_samples)
+            inv_mis = abs((1.0 - pint.value) - inv) / (sig_inv + pint.error)
+            w = s.weight if s.weight.ndim == 1 else s.weight.mean(axis=-1)
+            mc = w.mean()
+            se = w.std(ddof=1) / math.sqrt(n_samples)
+            ref = albedo(model, wi)
+            refv = float(np.mean(ref.value))
+            alb_mis = abs(mc - refv) / (se + float(np.mean(ref.error)) + 1e-9)
+            here = dict(theta_i_deg=t, phi_i_deg=p)
+            for key, val in (("weight_rel_err", werr), ("pdf_rel_err", perr),
+                             ("max_pdf_integral", pint.value), ("max_invalid_fraction", inv),
+                             ("max_invalid_mismatch_sigma", inv_mis), ("max_albedo_mismatch_sigma", alb_mis)):
+                if val > figs[key]:
+                    figs[key] = float(val)
+                    worst[key] = dict(here, value=float(val))
+            conds = [
+                (werr <= tol, f"weight != eval*cos/pdf (rel. err {werr:.3g}) at {here}"),
+                (perr <= tol, f"pdf(wi, sampled wo) != returned pdf (rel. err {perr:.3g}) at {here}"),
+                (pint.value <= 1 + 1e-4, f"pdf integrates to {pint.value:.6f} > 1 at {here}"),
+                (inv_mis <= sigmas, f"invalid fraction {inv:.4f} vs 1 - int pdf = {1 - pint.value:.4f} "
+                                    f"({inv_mis:.1f} sigma) at {here}"),
+                (alb_mis <= sigmas, f"Monte Carlo albedo {mc:.5f} +- {se:.1e} vs quadrature {refv:.5f} "
+                                    f"({alb_mis:.1f} sigma) at {here}"),
+                (not bad_nonfinite, f"non-finite weight or pdf at {here}"),
+            ]
+            for good, msg in conds:
+                if not good:
+                    ok = False
+                    problems.append(msg)
+            if progress:
+                progress()
+    fig = max(figs["weight_rel_err"], figs["pdf_rel_err"])
+    return PropertyResult("sampling", ok, fig,
+                          f"rel. err <= {tol:g}; int pdf <= 1; MC albedo and invalid fraction within {sigmas:g} sigma",
+                          dict(worst, problems=problems[:5]), figs)

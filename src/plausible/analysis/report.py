@@ -1,0 +1,109 @@
+"""``check(model)``: every plausibility property in one call, as a report."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+
+from .albedo import direction, is_isotropic
+from .checks import PropertyResult, _jsonable, energy, energy_directions, reciprocity, sampling_consistency
+from .chi2 import chi2
+
+#: Incidences (theta, phi in degrees) of the default chi-square tests.
+CHI2_DIRECTIONS = ((0, 0), (45, 0), (80, 0))
+CHI2_DIRECTIONS_ANISO = ((0, 0), (45, 0), (45, 60), (80, 30))
+
+
+@dataclass
+class CheckReport:
+    """Outcome of :func:`check`: one :class:`PropertyResult` per property."""
+
+    model: str
+    params: dict
+    results: list = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return all(r.passed for r in self.results)
+
+    def __getitem__(self, name) -> PropertyResult:
+        for r in self.results:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+    def to_dict(self):
+        return _jsonable(dict(model=self.model, params=self.params, passed=self.passed,
+                              results=[r.to_dict() for r in self.results]))
+
+    def to_json(self, **kw) -> str:
+        return json.dumps(self.to_dict(), **kw)
+
+    def rows(self):
+        """(property, figure, bound, verdict, worst case) rows for a table."""
+        out = []
+        for r in self.results:
+            w = {k: v for k, v in r.worst.items() if k not in ("wi", "wo", "problems")}
+            worst = ", ".join(f"{k}={_short(v)}" for k, v in list(w.items())[:4])
+            if r.worst.get("problems"):
+                worst = r.worst["problems"][0] + ("; " + worst if worst else "")
+            out.append((r.name, f"{r.figure:.6g}", r.bound, "PASS" if r.passed else "FAIL", worst))
+        return out
+
+    def __str__(self):
+        lines = [f"check {self.model} {self.params}: {'PASS' if self.passed else 'FAIL'}"]
+        lines += ["  " + " | ".join(r) for r in self.rows()]
+        return "\n".join(lines)
+
+
+def _short(v):
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{k}={_short(x)}" for k, x in v.items()) + "}"
+    return str(v)
+
+
+def check(model, *, alpha: float = 0.01, n_samples: int = 200_000, quick: bool = False,
+          progress=None) -> CheckReport:
+    """Run reciprocity, energy, sampling consistency and chi-square on ``model``.
+
+    The chi-square significance ``alpha`` is family-wise over the tests run here
+    (Sidak).  ``quick`` uses fewer directions and samples.  ``progress`` is
+    called with ``(total_steps)`` once and then ``()`` after each step.
+    """
+    iso = is_isotropic(model)
+    chi_dirs = CHI2_DIRECTIONS if iso else CHI2_DIRECTIONS_ANISO
+    thetas = (0, 30, 60, 80, 89.9) if quick else None
+    e_dirs = energy_directions(model, thetas) if thetas else energy_directions(model)
+    s_thetas = (0, 45, 85) if quick else (0, 30, 60, 80, 89)
+    s_phis = (0,) if iso else (0, 45)
+    n_s = 20_000 if quick else 50_000
+    total = 1 + len(e_dirs) + len(s_thetas) * len(s_phis) + len(chi_dirs)
+    tick = None
+    if progress:
+        tick = progress(total)
+    rep = CheckReport(model.name, _jsonable(model.params))
+    rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24))
+    if tick:
+        tick()
+    rep.results.append(energy(model, thetas_deg=thetas, progress=tick) if thetas
+                       else energy(model, progress=tick))
+    rep.results.append(sampling_consistency(model, thetas_deg=s_thetas, phis_deg=s_phis,
+                                            n_samples=n_s, progress=tick))
+    results = []
+    for t, p in chi_dirs:
+        r = chi2(model, direction(math.radians(t), math.radians(p)), alpha=alpha,
+                 n_tests=len(chi_dirs), n_samples=n_samples // (4 if quick else 1))
+        results.append((t, p, r))
+        if tick:
+            tick()
+    worst = min(results, key=lambda x: x[2].p_value)
+    rep.results.append(PropertyResult(
+        "chi2", all(r.passed for _, _, r in results), worst[2].p_value,
+        f">= {worst[2].alpha:.3g} (p-value, Sidak over {len(results)} tests)",
+        dict(theta_i_deg=worst[0], phi_i_deg=worst[1], message=worst[2].message,
+             cells=worst[2].worst_cells[:3]),
+        dict(tests=[dict(theta_deg=t, phi_deg=p, p_value=r.p_value, message=r.message) for t, p, r in results])))
+    return rep
