@@ -62,3 +62,24 @@ def info(name: str) -> ModelInfo:
 def make(name: str, **params):
     """Build the registered model ``name`` with ``params`` (defaults for the rest)."""
     return info(name).cls(**params)
+
+
+def parse_assignments(items) -> dict:
+    """``["n=20", "ks=0.9,0.6,0.2"]`` -> ``{"n": 20.0, "ks": [0.9, 0.6, 0.2]}``."""
+    from .params import parse_value
+
+    out = {}
+    for it in items:
+        if "=" not in it:
+            raise ValueError(f"parameter assignment {it!r} must look like name=value")
+        k, v = it.split("=", 1)
+        out[k.strip()] = parse_value(v)
+    return out
+
+
+def make_from_spec(spec: str, **extra):
+    """Build a model from ``"name"`` or ``"name:k=v:k=v"`` (colours as ``r,g,b``)."""
+    name, *assign = spec.split(":")
+    params = parse_assignments(assign)
+    params.update(extra)
+    return make(name.strip(), **params)

@@ -115,10 +115,7 @@ def anisotropic_half_vector(ops, nu, nv, u1, u2):
 
 def anisotropic_half_vector_pdf(ops, nu, nv, h):
     """``p_h(h)`` of :func:`anisotropic_half_vector` (journal eq. 6), zero for ``h.z <= 0``."""
-    e = anisotropic_exponent(ops, h[0], h[1], nu, nv)
-    lobe = pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], e)
-    norm = ops.sqrt((nu + 1.0) * (nv + 1.0)) / (2.0 * PI)
-    return ops.where(h[2] > 0, norm * lobe, 0.0)
+    return half_vector_lobe_pdf(ops, nu, nv, h, anisotropic_exponent(ops, h[0], h[1], nu, nv))
 
 
 def reflected_half_vector(ops, wi, nu, nv, u1, u2):
@@ -146,3 +143,82 @@ def mixture(ops, choose_a, a, b):
     """Component-wise select between two sampled directions."""
     return (ops.where(choose_a, a[0], b[0]), ops.where(choose_a, a[1], b[1]),
             ops.where(choose_a, a[2], b[2]))
+
+
+def half_vector_lobe_pdf(ops, nu, nv, h, e):
+    """``sqrt((nu+1)(nv+1))/(2 pi) (n.h)^e`` for ``h.z > 0``, else zero, with the
+    exponent ``e`` supplied by the caller (journal eq. 6, tech. report eq. 5).
+
+    :func:`anisotropic_half_vector_pdf` passes :func:`anisotropic_exponent`; a
+    caller that knows ``nu == nv`` may pass ``nu`` itself (no 0/0, no division).
+    ``(n.h)^e`` is taken from ``sin^2`` (:func:`pow_cos_from_sin2`), so ``h = n``
+    gives exactly the peak value ``sqrt((nu+1)(nv+1))/(2 pi)``.
+    """
+    lobe = pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], e)
+    norm = ops.sqrt((nu + 1.0) * (nv + 1.0)) / (2.0 * PI)
+    return ops.where(h[2] > 0, norm * lobe, 0.0)
+
+
+def beckmann_half_vector(ops, ax, ay, u1, u2):
+    """Half vector with density :func:`beckmann_half_vector_pdf` (anisotropic Beckmann
+    distribution of normals, ``p_h = D(h) (n.h)``).
+
+    B. Walter, "Notes on the Ward BRDF", Cornell PCG-05-06, 2005 (eqs. 6-7):
+    ``phi = atan(ay / ax tan(2 pi u2))`` taken in the quadrant of ``2 pi u2``,
+    written without ``atan``/``tan`` as ``(cos, sin)(phi) = (ax cos, ay sin)(2 pi u2) / norm``;
+    then ``tan^2(theta) = -log(1 - u1) / (cos^2 phi / ax^2 + sin^2 phi / ay^2)``, where
+    the denominator equals ``1 / (ax^2 cos^2 + ay^2 sin^2)(2 pi u2)``.  ``ax == ay == m``
+    is the isotropic Beckmann sampler ``tan^2(theta) = -m^2 log(1 - u1)``, ``phi = 2 pi u2``.
+    """
+    a = 2.0 * PI * u2
+    c = ax * ops.cos(a)
+    s = ay * ops.sin(a)
+    r2 = c * c + s * s
+    inv = 1.0 / ops.sqrt(r2)
+    tan2 = -ops.log1p(-ops.minimum(u1, 1.0 - 2.0 ** -53)) * r2
+    cos_t = 1.0 / ops.sqrt(1.0 + tan2)
+    sin_t = ops.sqrt(tan2) * cos_t
+    return (sin_t * c * inv, sin_t * s * inv, cos_t)
+
+
+def beckmann_half_vector_pdf(ops, ax, ay, h):
+    """``p_h(h) = exp(-((hx/ax)^2 + (hy/ay)^2) / hz^2) / (pi ax ay hz^3)``, zero for ``hz <= 0``.
+
+    Derived from :func:`beckmann_half_vector`: ``phi`` has density
+    ``1 / (2 pi ax ay A(phi))`` with ``A = cos^2/ax^2 + sin^2/ay^2``, and given ``phi``,
+    ``t = tan^2(theta)`` is exponential with rate ``A``; ``dt = 2 tan / cos^2 d theta``
+    and ``d omega = sin d theta d phi`` give the form above (Walter 2005, eq. 9 of the
+    Ward notes, is the same density).  It integrates to one over the hemisphere
+    (tests/models/test_ward.py checks this numerically).
+    """
+    hz = h[2]
+    ok = hz > 0
+    z = ops.where(ok, hz, 1.0)
+    e = ((h[0] / ax) ** 2 + (h[1] / ay) ** 2) / (z * z)
+    return ops.where(ok, ops.exp(-e) / (PI * ax * ay * z * z * z), 0.0)
+
+
+def beckmann_reflected_pdf(ops, wi, wo, ax, ay):
+    """Density of ``wo = reflect(wi, h)`` with ``h`` from :func:`beckmann_half_vector`:
+    ``p_h(h) / (4 (wi.h))`` (change of measure ``d omega_o = 4 (wi.h) d omega_h``;
+    Walter 2005), zero below the horizon."""
+    h = vec.half_vector(ops, wi, wo)
+    kh = vec.dot(wi, h)
+    ph = beckmann_half_vector_pdf(ops, ax, ay, h)
+    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
+    return ops.where(ok, ph / (4.0 * ops.where(ok, kh, 1.0)), 0.0)
+
+
+def reflected_pdf(ops, wi, wo, half_vector_pdf):
+    """Density of ``wo = reflect(wi, h)`` when ``h`` has solid-angle density
+    ``half_vector_pdf(h)``: ``p_h(h) / (4 (wi.h))`` with ``h`` the half vector
+    of ``wi`` and ``wo`` (the change of measure ``d omega_o = 4 (wi.h) d omega_h``;
+    Ashikhmin & Shirley 2000, journal eq. 8).  Zero unless ``wi.h > 0`` and both
+    directions are above the horizon.  Generic in the half-vector distribution
+    (used by the Schlick model; :func:`reflected_half_vector_pdf` is the same
+    change of measure for the Ashikhmin-Shirley distribution).
+    """
+    h = vec.half_vector(ops, wi, wo)
+    kh = vec.dot(wi, h)
+    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
+    return ops.where(ok, half_vector_pdf(h) / (4.0 * ops.where(ok, kh, 1.0)), 0.0)

@@ -48,16 +48,20 @@ def _integrate_once(model, wi, fn_values, m, levels, refine):
 
 
 def _integrate(model, wi, fn_values, m, m_low, levels, tol):
-    """Integrate at orders ``m`` and ``m_low``; while the two disagree by more
-    than ``tol`` (a kink or a jump inside a panel, e.g. the truncation of a
-    ``cos^0`` lobe), refine the uniform floor of panels 4x (at most twice)."""
+    """Integrate with the ``m``-point rule; the error estimate is the larger of
+    the differences to the ``m_low``-point rule (smooth integrands) and to the
+    same rule on a 2x finer floor of uniform panels (a kink or a jump inside a
+    panel, e.g. the truncation of a ``cos^0`` lobe, where both orders err
+    alike).  While the estimate exceeds ``tol``, refine the floor 4x (at most
+    once) and return the finest estimate."""
     refine = 1
     while True:
         hi = _integrate_once(model, wi, fn_values, m, levels, refine)
         lo = _integrate_once(model, wi, fn_values, m_low, levels, refine)
-        err = np.abs(hi - lo) + 1e-13 * np.abs(hi)
-        if np.all(err <= tol) or refine >= 16:
-            return hi, err
+        fine = _integrate_once(model, wi, fn_values, m, levels, 2 * refine)
+        err = np.maximum(np.abs(hi - lo), np.abs(fine - hi)) + 1e-13 * np.abs(hi)
+        if np.all(err <= tol) or refine >= 4:
+            return fine, err
         refine *= 4
 
 

@@ -1,0 +1,45 @@
+# plausible: the two commands of the README's Quick start, plus helpers.
+# Each target sets itself up (virtual environment, install, system packages) and is idempotent.
+
+PY       ?= python3
+VENV     := .venv
+BIN      := $(VENV)/bin
+STAMP    := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
+OUT      ?= out
+JOBS     ?= 2
+
+.PHONY: demo test test-all bench setup llvm clean
+
+setup: $(STAMP) llvm
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e ".[dev]"
+	touch $@
+
+# Dr.Jit's LLVM backend needs a shared libLLVM; Debian 12's libLLVM 15 crashes
+# (`Cannot select: f32 = fmaximum`), libllvm19 works.
+llvm:
+	@if ! ls /usr/lib/*/libLLVM-19.so* >/dev/null 2>&1 && ! ls /usr/lib/*/libLLVM.so.19* >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null; \
+	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null; fi; \
+	fi
+
+# The main job: verify every model and plot the albedo curves of the papers' figures.
+demo: setup
+	$(BIN)/python -m plausible.demo --out $(OUT)
+
+# The default test run (under 10 minutes on 2 cores).
+test: setup
+	$(BIN)/python -m pytest -q -n $(JOBS) -m "not slow"
+
+# Everything, exhaustive sweeps included.
+test-all: setup
+	$(BIN)/python -m pytest -q -n $(JOBS)
+
+bench: setup
+	$(BIN)/python -m pytest -q benchmarks --benchmark-only -p no:xdist
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache

@@ -1,0 +1,239 @@
+"""The Ashikhmin--Shirley anisotropic Phong BRDF.
+
+M. Ashikhmin, P. Shirley, "An anisotropic Phong BRDF model", Journal of
+Graphics Tools 5(2), 2000 (``ashikhmin-shirley-2000-jgt.txt``, the version that
+decides) and the technical report UUCS-00-014 "An anisotropic Phong light
+reflection model" (``ashikhmin-shirley-2000-tech-report.txt``, the derivation).
+
+``rho = rho_s + rho_d`` (journal eq. 1, report eqs. 1 and 15):
+
+* ``rho_s`` -- a Fresnel-weighted anisotropic Blinn-Phong lobe about the half
+  vector (journal eqs. 2-4, report eqs. 10, 11, 16), written here as
+  ``p_h(h) F(k.h) / (4 (k.h) max(n.k1, n.k2))`` with ``p_h`` the half-vector
+  density of journal eq. 6, so the lobe exists once (in :mod:`plausible.warps`)
+  and is shared with the sampler;
+* ``rho_d`` -- the non-Lambertian diffuse term of journal eq. 5 (report eq. 14),
+  whose directional albedo is ``rd (1 - rs) (1 - (1 - cos(theta)/2)^5)`` exactly
+  (derived in ``docs/models/ashikhmin-shirley.md``).
+
+Notation: ``k1 = wi``, ``k2 = wo``, ``u = x``, ``v = y``, ``n = z``.
+"""
+
+from __future__ import annotations
+
+from .. import vec, warps
+from ..bxdf import BxDF, above
+from ..fresnel import schlick
+from ..ops import PI
+from ..params import Param
+from ..registry import register
+
+REFERENCES = (
+    "Ashikhmin & Shirley, An anisotropic Phong BRDF model, JGT 5(2), 2000",
+    "Ashikhmin & Shirley, An anisotropic Phong light reflection model, "
+    "tech. report UUCS-00-014, 2000",
+)
+
+#: Constant of the diffuse term, ``28 / (23 pi)`` (journal eq. 5).
+DIFFUSE_NORM = 28.0 / (23.0 * PI)
+
+
+def _exponent_param(name, axis):
+    return Param(name, 100.0, 0.0, 1e6, "scalar",
+                 f"Phong-like exponent of the lobe along the {axis} tangent "
+                 f"(larger is narrower along {axis})", (0.0, 1.0, 1e4))
+
+
+NU = _exponent_param("nu", "u (x)")
+NV = _exponent_param("nv", "v (y)")
+RS = Param("rs", 0.05, 0.0, 1.0, "color",
+           "specular reflectance at normal incidence (Schlick's R0)", (0.0, 1.0))
+RD = Param("rd", 0.5, 0.0, 1.0, "color",
+           "diffuse reflectance of the substrate under the specular coating", (0.0, 1.0))
+
+
+# -- the formulas ---------------------------------------------------------------
+
+def half_vector_exponent(ops, h, nu, nv):
+    """``nu cos^2(phi_h) + nv sin^2(phi_h) = (nu hu^2 + nv hv^2) / (1 - hn^2)``
+    (journal eq. 4, report eq. 16), without trigonometry.
+
+    Isotropic fast path: when ``nu == nv`` as plain floats the exponent is ``nu``
+    itself (no division, no 0/0 at ``h = n``); otherwise
+    :func:`plausible.warps.anisotropic_exponent`.
+    """
+    if isinstance(nu, float) and isinstance(nv, float) and nu == nv:
+        return nu
+    return warps.anisotropic_exponent(ops, h[0], h[1], nu, nv)
+
+
+def half_vector_density(ops, h, nu, nv):
+    """``p_h(h) = sqrt((nu+1)(nv+1)) / (2 pi) (n.h)^(nu cos^2 phi + nv sin^2 phi)``,
+    journal eq. 6 (report eq. 5); zero for ``h.z <= 0``.  Exactly the peak value
+    ``sqrt((nu+1)(nv+1)) / (2 pi)`` at ``h = n``."""
+    return warps.half_vector_lobe_pdf(ops, nu, nv, h, half_vector_exponent(ops, h, nu, nv))
+
+
+def specular(ops, wi, wo, nu, nv, rs):
+    """Specular term, journal eq. 4 (report eq. 16):
+
+    ``rho_s = sqrt((nu+1)(nv+1)) / (8 pi) (n.h)^e / ((h.k) max(n.k1, n.k2)) F(h.k)``
+    ``      = p_h(h) F(h.k) / (4 (h.k) max(n.k1, n.k2))``
+
+    with ``F`` Schlick's approximation (journal eq. 3) and ``p_h`` journal eq. 6.
+    ``h.k`` is the mean of ``k1.h`` and ``k2.h`` (equal in exact arithmetic), which
+    makes the value bitwise reciprocal.  Zero unless both directions are above
+    the horizon.
+    """
+    ok = above(ops, wi, wo)
+    h = vec.half_vector(ops, wi, wo)
+    kh = 0.5 * (vec.dot(wi, h) + vec.dot(wo, h))
+    ok = ok & (kh > 0)
+    den = 4.0 * ops.where(ok, kh * ops.maximum(wi[2], wo[2]), 1.0)
+    val = half_vector_density(ops, h, nu, nv) * schlick(ops, kh, rs) / den
+    return ops.where(ok, val, 0.0)
+
+
+def diffuse_factor(cos_theta):
+    """``1 - (1 - cos(theta)/2)^5`` (journal eq. 5, report eq. 14), in the
+    expanded Horner form ``x (5 - 10x + 10x^2 - 5x^3 + x^4)``, ``x = cos(theta)/2``,
+    which keeps full relative accuracy near grazing (the difference form
+    cancels).  It is also the diffuse term's normalised directional albedo."""
+    x = 0.5 * cos_theta
+    return x * (5.0 + x * (-10.0 + x * (10.0 + x * (-5.0 + x))))
+
+
+def diffuse(ops, wi, wo, rs, rd):
+    """Diffuse term, journal eq. 5 (report eq. 14):
+
+    ``rho_d = 28 rd / (23 pi) (1 - rs) (1 - (1 - n.k1/2)^5) (1 - (1 - n.k2/2)^5)``.
+    """
+    ok = above(ops, wi, wo)
+    ci = ops.where(ok, wi[2], 0.0)
+    co = ops.where(ok, wo[2], 0.0)
+    # The product of the two factors first: f(a, b) == f(b, a) bitwise.
+    val = (DIFFUSE_NORM * rd * (1.0 - rs)) * (diffuse_factor(ci) * diffuse_factor(co))
+    return ops.where(ok, val, 0.0)
+
+
+def diffuse_albedo(cos_theta, rs, rd):
+    """Directional albedo of :func:`diffuse`: ``rd (1 - rs) (1 - (1 - cos(theta)/2)^5)``.
+
+    Derived (docs): ``int_{H^2} (1 - (1 - z/2)^5) z d omega = 23 pi / 28``, so the
+    constant ``28 / (23 pi)`` of journal eq. 5 cancels exactly.  The hemispherical
+    albedo is ``23/28 rd (1 - rs)``.
+    """
+    return rd * (1.0 - rs) * diffuse_factor(cos_theta)
+
+
+def specular_probability(ops, cos_i, rs, rd):
+    """Probability of sampling the specular lobe, per incident direction.
+
+    ``ps = Fs / (Fs + Ad)`` with ``Fs = F(cos theta_i)`` (Schlick, mean ``rs``),
+    an estimate of the specular albedo, and ``Ad`` the diffuse albedo
+    :func:`diffuse_albedo` (mean ``rs``, ``rd``).  ``Fs + Ad == 0`` happens only
+    where the diffuse term vanishes (``rd == 0`` or ``rs == 1``) or at the
+    horizon; ``ps = 1`` there.  ``ps < 1`` wherever the diffuse term can be
+    non-zero, and the cosine-weighted diffuse sampler covers the whole
+    hemisphere, so the mixture's support always contains the BRDF's.
+    """
+    c = ops.maximum(cos_i, 0.0)
+    fs = schlick(ops, c, rs)
+    ad = diffuse_albedo(c, rs, rd)
+    s = fs + ad
+    return ops.where(s > 0, fs / ops.where(s > 0, s, 1.0), 1.0)
+
+
+def specular_pdf(ops, wi, wo, nu, nv):
+    """Density of :func:`specular_sample`: ``p_h(h) / (4 (k1.h))``, journal eq. 8
+    (the report's eq. 18 prints it inverted; see the docs)."""
+    return warps.reflected_half_vector_pdf(ops, wi, wo, nu, nv)
+
+
+def specular_sample(ops, wi, nu, nv, u1, u2):
+    """``h`` from ``p_h`` (journal eqs. 9, 10 with a continuous quadrant map),
+    ``k2 = -k1 + 2 (k1.h) h`` (journal eq. 7)."""
+    return warps.reflected_half_vector(ops, wi, nu, nv, u1, u2)
+
+
+def diffuse_pdf(ops, wi, wo):
+    return ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
+
+
+# -- the models -------------------------------------------------------------------
+
+@register("ashikhmin-shirley",
+          "Ashikhmin-Shirley anisotropic Phong BRDF (JGT 2000): Fresnel-weighted "
+          "anisotropic half-vector lobe (nu, nv, rs) plus the coupled non-Lambertian "
+          "diffuse term (rd).",
+          references=REFERENCES)
+class AshikhminShirley(BxDF):
+    """``AshikhminShirley(nu, nv, rs, rd)``: ``rho = rho_s + rho_d`` (journal eq. 1).
+
+    Sampling: with probability :func:`specular_probability` (a function of
+    ``wi``) the half-vector lobe, otherwise the cosine-weighted hemisphere;
+    ``pdf`` is the same mixture ("a weighted average", journal Sec. 3).
+    """
+
+    PARAMS = (NU, NV, RS, RD)
+
+    def spec_probability(self, ops, wi, q):
+        """Mixture weight of the specular lobe (override to experiment)."""
+        return specular_probability(ops, wi[2], q.rs, q.rd)
+
+    def _f(self, ops, wi, wo, p):
+        return specular(ops, wi, wo, p.nu, p.nv, p.rs) + diffuse(ops, wi, wo, p.rs, p.rd)
+
+    def _pdf(self, ops, wi, wo, q):
+        ps = self.spec_probability(ops, wi, q)
+        return ps * specular_pdf(ops, wi, wo, q.nu, q.nv) + (1.0 - ps) * diffuse_pdf(ops, wi, wo)
+
+    def _sample(self, ops, wi, u, q):
+        ps = self.spec_probability(ops, wi, q)
+        spec = specular_sample(ops, wi, q.nu, q.nv, u[1], u[2])
+        diff = warps.cosine_hemisphere(ops, u[1], u[2])
+        return warps.mixture(ops, u[0] < ps, spec, diff)
+
+
+@register("ashikhmin-shirley-specular",
+          "Specular term of Ashikhmin-Shirley alone (JGT 2000 eq. 4): metals.",
+          references=REFERENCES)
+class AshikhminShirleySpecular(BxDF):
+    """``AshikhminShirleySpecular(nu, nv, rs)``: ``rho_s`` of journal eq. 4,
+    sampled through the half vector (journal eqs. 6-10)."""
+
+    PARAMS = (NU, NV, Param("rs", 0.9, 0.0, 1.0, "color", RS.doc, RS.extremes))
+
+    def _f(self, ops, wi, wo, p):
+        return specular(ops, wi, wo, p.nu, p.nv, p.rs)
+
+    def _pdf(self, ops, wi, wo, q):
+        return specular_pdf(ops, wi, wo, q.nu, q.nv)
+
+    def _sample(self, ops, wi, u, q):
+        return specular_sample(ops, wi, q.nu, q.nv, u[1], u[2])
+
+
+@register("ashikhmin-shirley-diffuse",
+          "Diffuse term of Ashikhmin-Shirley alone (JGT 2000 eq. 5); albedo "
+          "rd (1 - rs) (1 - (1 - cos/2)^5).",
+          references=REFERENCES)
+class AshikhminShirleyDiffuse(BxDF):
+    """``AshikhminShirleyDiffuse(rs, rd)``: ``rho_d`` of journal eq. 5, sampled
+    cosine-weighted (as the paper does)."""
+
+    PARAMS = (RS, RD)
+
+    def peak_directions(self, wi):
+        import numpy as np
+
+        return [np.array([0.0, 0.0, 1.0])]
+
+    def _f(self, ops, wi, wo, p):
+        return diffuse(ops, wi, wo, p.rs, p.rd)
+
+    def _pdf(self, ops, wi, wo, q):
+        return diffuse_pdf(ops, wi, wo)
+
+    def _sample(self, ops, wi, u, q):
+        return warps.cosine_hemisphere(ops, u[1], u[2])

@@ -1,0 +1,30 @@
+import math
+
+import numpy as np
+import pytest
+
+import plausible
+from plausible.analysis.suite import variants
+
+
+def all_models():
+    return plausible.names()
+
+
+def model_cases(max_variants=4):
+    """(name, params) for every registered model: defaults and declared extremes."""
+    return [pytest.param(n, kw, id=f"{n}-{'-'.join(f'{k}={v}' for k, v in kw.items()) or 'default'}")
+            for n in plausible.names() for kw in variants(n, max_variants)]
+
+
+def random_upper(rng, n, zmin=0.0):
+    """Uniform random directions on the upper hemisphere (z > zmin)."""
+    z = rng.uniform(zmin, 1.0, n)
+    phi = rng.uniform(0, 2 * math.pi, n)
+    s = np.sqrt(1 - z * z)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)

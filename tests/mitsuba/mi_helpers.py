@@ -1,0 +1,97 @@
+"""Shared set-up of the Mitsuba plugin tests (imported by tests/mitsuba/test_*.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+mi = pytest.importorskip("mitsuba")
+dr = pytest.importorskip("drjit")
+
+VARIANT = None
+for _v in ("llvm_ad_rgb",):
+    try:
+        mi.set_variant(_v)
+        VARIANT = _v
+        break
+    except (ImportError, AttributeError, RuntimeError):
+        continue
+if VARIANT is None:
+    pytest.skip("no Mitsuba LLVM variant can be set", allow_module_level=True)
+
+import plausible  # noqa: E402
+import plausible.mitsuba as pm  # noqa: E402
+
+PLUGINS = pm.register()
+PLUGIN_MODELS = pm.plugin_names()
+
+#: "Moderate" parameters for models whose defaults are too sharp or isotropic
+#: for quick float32 / chi-square checks.  Models not listed use their defaults
+#: with exponent-like scalars (upper bound >= 1000) capped at 40 (see moderate()).
+MODERATE = {
+    "ashikhmin-shirley": dict(nu=10.0, nv=60.0, rs=[0.05, 0.1, 0.2], rd=[0.3, 0.4, 0.5]),
+    "ashikhmin-shirley-specular": dict(nu=10.0, nv=60.0),
+    "modified-phong": dict(kd=[0.3, 0.4, 0.5], ks=[0.3, 0.2, 0.1], n=30.0),
+}
+
+
+def moderate(model_name: str) -> dict:
+    """Parameters used by the tests for ``model_name`` (native plausible names)."""
+    info = plausible.info(model_name)
+    out = {}
+    for p in info.params:
+        if p.default is None:
+            continue
+        if p.kind == "scalar" and p.hi >= 1e3 and not p.integer:
+            out[p.name] = float(min(p.default, 40.0))
+        elif p.kind == "color":
+            d = float(np.mean(p.default))
+            out[p.name] = [0.6 * d, d, 0.8 * d]
+        else:
+            out[p.name] = p.default
+    if model_name == "lafortune":
+        # one Phong-like lobe and one off-specular lobe, exponents 20 and 8
+        out["lobes"] = ((-1.0, -1.0, 1.0, 20.0, 1.2), (-0.8, -0.8, 0.5, 8.0, 0.3))
+    out.update(MODERATE.get(model_name, {}))
+    return out
+
+
+def to_dict(plugin: str, params: dict) -> dict:
+    """A ``mi.load_dict`` description of ``plugin`` with ``params``."""
+    d = {"type": plugin}
+    for k, v in params.items():
+        kind = plausible.info(pm.plugin_names()[plugin]).param(k).kind
+        if kind not in ("scalar", "color", "choice"):
+            d[k] = pm.format_structured(v)
+        elif isinstance(v, (list, tuple, np.ndarray)):
+            d[k] = {"type": "rgb", "value": [float(x) for x in v]}
+        else:
+            d[k] = v
+    return d
+
+
+def upper_dirs(rng, n, zmin=0.05):
+    """Random unit vectors with ``z >= zmin`` (float32-representable)."""
+    out = []
+    while sum(len(o) for o in out) < n:
+        v = rng.normal(size=(n, 3))
+        v /= np.linalg.norm(v, axis=1, keepdims=True)
+        v[:, 2] = np.abs(v[:, 2])
+        out.append(v[v[:, 2] >= zmin])
+    v = np.concatenate(out)[:n].astype(np.float32).astype(np.float64)
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def vec3(a):
+    return mi.Vector3f(np.ascontiguousarray(a.T, dtype=np.float32))
+
+
+def interaction(wi):
+    si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
+    si.wi = vec3(wi)
+    return si
+
+
+def spectrum_np(v):
+    """Mitsuba Color3f / Spectrum of width n -> float64 array (n, channels)."""
+    return np.array(v, dtype=np.float64).T
