@@ -179,7 +179,8 @@ class BxDF:
             wo_c = split(wo)
             pdf = np.broadcast_to(self._pdf(NP, split(wi), wo_c, self.q), shape)
             f = self._f(NP, self._color_axis(split(wi)), self._color_axis(wo_c), self.p)
-            ok = (pdf > 0) & (wo[..., 2] > 0) & (wi[..., 2] > 0)
+            # a pdf below 1e-250 is a sample that cannot occur (and cos/pdf would overflow)
+            ok = (pdf > 1e-250) & (wo[..., 2] > 0) & (wi[..., 2] > 0)
             ratio = np.where(ok, wo[..., 2] / np.where(ok, pdf, 1.0), 0.0)
             if self.channels:
                 ratio = ratio[..., None]

@@ -61,10 +61,16 @@ NP = SimpleNamespace(
 _DR_CACHE: dict[str, SimpleNamespace] = {}
 
 
-def drjit_ops() -> SimpleNamespace:
-    """The Dr.Jit namespace (imported lazily: Dr.Jit is an optional dependency)."""
-    if "dr" in _DR_CACHE:
-        return _DR_CACHE["dr"]
+def drjit_ops(float_type=None) -> SimpleNamespace:
+    """The Dr.Jit namespace (imported lazily: Dr.Jit is an optional dependency).
+
+    ``float_type`` (e.g. ``drjit.llvm.Float64`` or ``mi.Float``) is the array
+    type that ``where`` gives its result when both branches are Python
+    numbers (``dr.select`` would otherwise default to single precision).
+    """
+    key = repr(float_type)
+    if key in _DR_CACHE:
+        return _DR_CACHE[key]
     import drjit as dr
 
     def power(b, e):
@@ -79,6 +85,8 @@ def drjit_ops() -> SimpleNamespace:
         return dr.select(d == 0, x, dr.log(u) * (x / dr.select(d == 0, 1.0, d)))
 
     def where(cond, a, b):
+        if float_type is not None and isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            a = float_type(a)
         return dr.select(cond, a, b)
 
     ns = SimpleNamespace(
@@ -98,5 +106,5 @@ def drjit_ops() -> SimpleNamespace:
         atan2=dr.atan2,
         clip=dr.clip,
     )
-    _DR_CACHE["dr"] = ns
+    _DR_CACHE[key] = ns
     return ns

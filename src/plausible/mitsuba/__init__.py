@@ -181,13 +181,13 @@ def make_plugin_class(plugin: str, model_name: str):
             mi.BSDF.__init__(self, props)
             names = [p.name for p in info.params]
             given = {}
-            material = props["material"] if props.has_property("material") else None
+            material = props["material"] if "material" in props else None
             if material is not None:
                 if not {"eta", "k"} <= set(names):
                     raise ValueError(f"{plugin}: 'material' needs a model with 'eta' and 'k' "
                                      f"parameters ({model_name} has {', '.join(names)})")
                 for clash in ("eta", "k"):
-                    if props.has_property(clash):
+                    if clash in props:
                         raise ValueError(f"{plugin}: give either 'material' or {clash!r}, not both")
             for key in props.keys():
                 if key == "material":
