@@ -1,0 +1,75 @@
+"""The albedo integrator against closed forms and against Monte Carlo."""
+
+import math
+
+import numpy as np
+import pytest
+
+import plausible
+from plausible.analysis import albedo, albedo_curve, direction, hemispherical_albedo, is_isotropic
+
+THETAS = (0, 30, 60, 80, 85, 89, 89.9)
+EXPONENTS = (0, 1, 10, 100, 1000, 1e4)
+
+
+@pytest.mark.parametrize("name", ["modified-phong", "reciprocal-phong", "reciprocal-blinn"])
+@pytest.mark.parametrize("n", EXPONENTS)
+def test_albedo_at_most_one_and_finite_on_the_grid(name, n):
+    kw = dict(kd=0.0, ks=1.0) if name == "modified-phong" else dict(ks=1.0)
+    m = plausible.make(name, n=n, **kw)
+    res = albedo_curve(m, np.radians(THETAS))
+    assert np.all(np.isfinite(res.value)) and np.all(np.isfinite(res.error))
+    if n == 0:
+        # cos^0 lobe: a jump at alpha = 90 deg; the closed form a = (1 + cos theta)/2 (Phong part) is the truth
+        spec = (1 + np.cos(np.radians(THETAS))) / 2
+        assert np.all(np.abs(res.value - spec) < 1e-4)
+    else:
+        assert np.all(res.error < 1e-4)
+    assert np.all(res.value <= 1 + 1e-9)
+    assert res.value[0] == pytest.approx(1.0, abs=1e-8)   # normalisation: exactly 1 at normal incidence
+
+
+def _mc_albedo(m, wi, n=400_000, seed=0):
+    s = m.sample(wi, np.random.default_rng(seed).random((n, 3)))
+    w = s.weight if s.weight.ndim == 1 else s.weight.mean(-1)
+    return w.mean(), w.std() / math.sqrt(n)
+
+
+@pytest.mark.parametrize("name,kw", [
+    ("reciprocal-phong", dict(n=1e4)), ("reciprocal-blinn", dict(n=1e4)), ("reciprocal-blinn", dict(n=3)),
+    ("modified-phong", dict(kd=0.3, ks=0.7, n=500)), ("phong", dict(n=50)),
+])
+@pytest.mark.parametrize("theta", [0, 45, 80, 89.9])
+def test_quadrature_agrees_with_monte_carlo(name, kw, theta):
+    m = plausible.make(name, **kw)
+    wi = direction(math.radians(theta), 0.7)
+    q = albedo(m, wi)
+    mc, se = _mc_albedo(m, wi)
+    assert abs(q.value - mc) < 5 * se + q.error + 1e-12
+
+
+def test_reciprocal_phong_albedo_tends_to_cos_theta_as_n_grows():
+    # Neumann et al. sec. 1.2: "in this limit case the albedo follows the cosine function"
+    m = plausible.make("reciprocal-phong", n=1e5)
+    for t in (20, 50, 70):
+        assert albedo(m, direction(math.radians(t))).value == pytest.approx(math.cos(math.radians(t)), rel=1e-3)
+
+
+def test_hemispherical_albedo_closed_forms():
+    assert hemispherical_albedo(plausible.make("lambertian", rd=0.6)).value == pytest.approx(0.6, abs=1e-10)
+    # n = 0 truncated Phong lobe: a(mu) = (1 + mu)/2 -> 2 int (1 + mu)/2 mu dmu = 1/2 + 1/3
+    r = hemispherical_albedo(plausible.make("reciprocal-phong", ks=1.0, n=0.0), n_theta=8)
+    assert r.value == pytest.approx(0.5 + 1 / 3, abs=1e-4)
+
+
+def test_isotropy_probe():
+    assert is_isotropic(plausible.make("modified-phong"))
+
+
+def test_bad_input():
+    m = plausible.make("lambertian")
+    with pytest.raises(ValueError, match="thetas"):
+        albedo_curve(m, [0.1, 2.0])
+    with pytest.raises(ValueError, match="wi"):
+        albedo(m, [0, 0, 0])
+    assert albedo(m, [0, 0, -1]).value == 0

@@ -1,0 +1,159 @@
+"""Every checker must be able to fail: deliberately broken models are rejected
+with the right figure, and the plausible models pass."""
+
+import math
+
+import numpy as np
+import pytest
+
+import plausible
+from plausible import warps
+from plausible.analysis import albedo, chi2, direction, energy, reciprocity, sampling_consistency
+from plausible.bxdf import BxDF, Sample, above
+from plausible.models.phong import ReciprocalPhong, lobe_pdf, phong_sample
+
+
+class Asymmetric(ReciprocalPhong):
+    """Reciprocal Phong times (1 + 0.3 wi.x): not symmetric."""
+
+    def _f(self, ops, wi, wo, p):
+        return super()._f(ops, wi, wo, p) * (1.0 + 0.3 * wi[0])
+
+
+class OverBright(ReciprocalPhong):
+    """5% too bright: albedo 1.05 at normal incidence."""
+
+    def _f(self, ops, wi, wo, p):
+        return 1.05 * super()._f(ops, wi, wo, p)
+
+
+class PdfOffBy10(ReciprocalPhong):
+    def _pdf(self, ops, wi, wo, q):
+        return 1.1 * lobe_pdf(ops, wi, wo, q.n)
+
+
+class WrongExponentSampler(ReciprocalPhong):
+    """Samples cos^(1.25 n) but claims cos^n."""
+
+    def _sample(self, ops, wi, u, q):
+        return phong_sample(ops, wi, 1.25 * q.n, u[1], u[2])
+
+
+class DropsQuadrant(ReciprocalPhong):
+    """Never produces samples whose lobe-frame azimuth lies in the last quarter."""
+
+    def _sample(self, ops, wi, u, q):
+        return phong_sample(ops, wi, q.n, u[1], 0.75 * u[2])
+
+
+class BadWeight(ReciprocalPhong):
+    """Returns weights 2% off eval*cos/pdf."""
+
+    def sample(self, wi, u):
+        s = super().sample(wi, u)
+        return Sample(s.wo, 1.02 * s.weight, s.pdf)
+
+
+def make(cls, **kw):
+    m = cls(**kw)
+    return m
+
+
+def test_reciprocity_rejects_asymmetric_model_and_reports_worst_pair():
+    r = reciprocity(make(Asymmetric, n=10))
+    assert not r.passed and r.figure > 0.1
+    wi, wo = np.array(r.worst["wi"]), np.array(r.worst["wo"])
+    m = make(Asymmetric, n=10)
+    f1, f2 = m.eval(wi, wo), m.eval(wo, wi)
+    assert abs(f1 - f2) / max(f1, f2) == pytest.approx(r.figure)
+    assert reciprocity(plausible.make("reciprocal-phong", n=10)).passed
+
+
+@pytest.mark.parametrize("name", ["phong", "blinn"])
+def test_original_phong_and_blinn_fail_reciprocity(name):
+    r = reciprocity(plausible.make(name, n=20))
+    assert not r.passed and r.figure > 0.5
+
+
+def test_energy_rejects_overbright_model_at_the_right_direction():
+    r = energy(make(OverBright, n=10), thetas_deg=(0, 30, 60, 89))
+    assert not r.passed
+    assert r.figure == pytest.approx(1.05, abs=1e-6)
+    assert r.worst["theta_i_deg"] == 0
+    assert r.details["onset_deg"] == 0
+    assert energy(plausible.make("reciprocal-phong", n=10), thetas_deg=(0, 30, 60, 89)).passed
+
+
+def test_energy_reports_onset_for_original_phong():
+    r = energy(plausible.make("phong", n=1.0, ks=1.0))
+    assert not r.passed
+    # albedo at theta: (1/cos theta) * reciprocal albedo; exceeds 1 beyond some angle
+    assert r.details["onset_deg"] is not None and r.details["onset_deg"] > 0
+    assert r.worst["theta_i_deg"] == 89.9
+
+
+def test_sampling_consistency_rejects_pdf_off_by_10_percent():
+    r = sampling_consistency(make(PdfOffBy10, n=20), thetas_deg=(0, 45), n_samples=20000)
+    assert not r.passed
+    assert r.details["max_pdf_integral"] == pytest.approx(1.1, rel=1e-3)
+
+
+def test_sampling_consistency_rejects_wrong_weights():
+    r = sampling_consistency(make(BadWeight, n=20), thetas_deg=(0,), n_samples=5000)
+    assert not r.passed
+    assert r.details["weight_rel_err"] == pytest.approx(0.02, rel=1e-6)
+
+
+def test_sampling_consistency_rejects_wrong_exponent_via_albedo():
+    # The weights are consistent with eval/pdf but the sampler draws another
+    # distribution: the Monte Carlo albedo no longer matches the quadrature.
+    r = sampling_consistency(make(WrongExponentSampler, n=20), thetas_deg=(0, 45), n_samples=50000)
+    assert not r.passed
+    assert r.details["max_albedo_mismatch_sigma"] > 10
+
+
+@pytest.mark.parametrize("cls", [WrongExponentSampler, DropsQuadrant, PdfOffBy10])
+@pytest.mark.parametrize("theta", [0, 45, 85])
+def test_chi2_rejects_broken_samplers(cls, theta):
+    r = chi2(make(cls, n=30), direction(math.radians(theta)), n_samples=100_000)
+    assert not r.passed and r.p_value < 1e-8, r.message
+
+
+@pytest.mark.parametrize("n", [1e3, 1e4])
+@pytest.mark.parametrize("theta", [0, 60, 85, 89.5])
+def test_chi2_passes_sharp_lobes_at_grazing(n, theta):
+    for name in ("reciprocal-phong", "reciprocal-blinn"):
+        r = chi2(plausible.make(name, n=n), direction(math.radians(theta), 0.4), n_samples=100_000, alpha=0.001)
+        assert r.passed, (name, r.message)
+
+
+def test_chi2_fixed_coarse_grid_gives_false_failures_where_adaptive_passes():
+    m = plausible.make("reciprocal-phong", n=1e4)
+    wi = direction(math.radians(60))
+    fixed = chi2(m, wi, n_samples=100_000, method="fixed")
+    adaptive = chi2(m, wi, n_samples=100_000)
+    assert not fixed.passed and fixed.p_value < 1e-10
+    assert adaptive.passed
+
+
+def test_chi2_sidak_correction():
+    from plausible.analysis import sidak
+
+    assert sidak(0.01, 1) == pytest.approx(0.01)
+    assert (1 - sidak(0.01, 10)) ** 10 == pytest.approx(0.99)
+
+
+def test_check_report_is_json_and_passes_for_modified_phong():
+    import json
+
+    rep = plausible.check(plausible.make("modified-phong"), quick=True)
+    d = json.loads(rep.to_json())
+    assert d["passed"] is True
+    assert [r["name"] for r in d["results"]] == ["reciprocity", "energy", "sampling", "chi2"]
+
+
+def test_check_report_names_failures_for_phong():
+    rep = plausible.check(plausible.make("phong", n=20), quick=True)
+    assert not rep.passed
+    assert not rep["reciprocity"].passed and not rep["energy"].passed
+    assert rep["sampling"].passed and rep["chi2"].passed
