@@ -365,3 +365,14 @@ def test_numpy_and_drjit_hooks_agree():
     for r, g in zip(ref, got):
         np.testing.assert_allclose(np.array(g), r, rtol=1e-9, atol=1e-12)
     assert np.count_nonzero(ref[2] > 0) > n // 2
+
+
+def test_cross_check_with_analysis_albedo():
+    """plausible.analysis.albedo (adaptive quadrature, written independently) agrees
+    with this file's Gauss-Legendre rule."""
+    analysis = pytest.importorskip("plausible.analysis")
+    m = plausible.make("lafortune", lobes=NON_PHONG, rd=RD)
+    for th in (0.0, 60.0, 80.0):
+        wi = from_angles(th, 25.0)
+        r = analysis.albedo(m, wi)
+        assert r.value == pytest.approx(quad_albedo(m, wi), abs=1e-9 + 3 * r.error)
