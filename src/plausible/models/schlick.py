@@ -92,6 +92,14 @@ def smith_g(ops, v, r):
     return ops.where(den > 0, c / ops.where(den > 0, den, 1.0), 0.0)
 
 
+def smith_g_over_v(ops, v, r):
+    """``G(v) / v = 1 / (r - r v + v)``, finite at grazing ``v -> 0`` (where
+    ``G(v) G(v') / (v v')`` computed as written would underflow to 0/0)."""
+    c = ops.minimum(ops.maximum(v, 0.0), 1.0)
+    den = r - r * c + c
+    return ops.where(den > 0, 1.0 / ops.where(den > 0, den, 1.0), 0.0)
+
+
 def half_vector_pdf(ops, h, r, p):
     """``p_h(h) = Z(t) t A(w) / pi`` (normalised ``A``), ``t = h.z > 0``: the
     density of :func:`sample_half_vector` per unit solid angle of ``h``."""
@@ -132,8 +140,8 @@ def schlick_specular(ops, wi, wo, r, p, rs, form):
     s = h[0] * h[0] + h[1] * h[1]
     v = ops.where(ok, wi[2], 1.0)
     vp = ops.where(ok, wo[2], 1.0)
-    val = (fresnel.schlick(ops, u, rs) * smith_g(ops, v, r) * smith_g(ops, vp, r)
-           * zenith(ops, s, r) * azimuth(ops, h[0], h[1], p, form) / (4.0 * PI * v * vp))
+    val = (fresnel.schlick(ops, u, rs) * smith_g_over_v(ops, v, r) * smith_g_over_v(ops, vp, r)
+           * zenith(ops, s, r) * azimuth(ops, h[0], h[1], p, form) / (4.0 * PI))
     return ops.where(ok, val, 0.0)
 
 
