@@ -43,7 +43,11 @@ class NeumannMetal(BxDF):
     """
 
     PARAMS = (
-        Param("n", 100.0, kind="scalar", **EXPONENT),
+        # The paper's bound c_n <= (n+2)/(2 pi) does not keep the albedo <= 1 below
+        # n = 2 (measured: 1.0858 at n = 0, 1 + 2.9e-4 at n = 1), so n >= 2 is required.
+        Param("n", 100.0, kind="scalar", **dict(EXPONENT, lo=2.0, extremes=(2.0, 1e4),
+                                                doc="Phong exponent n >= 2 (the paper's energy "
+                                                    "bound fails below 2)")),
         Param("c", None, 0.0, kind="scalar",
               doc="normalisation c_n; default (n + 2) / (2 pi), the largest energy-conserving value"),
         Param("rs", 1.0, 0.0, 1.0, "color", "specular reflectance / Schlick R0", (0.0, 1.0)),

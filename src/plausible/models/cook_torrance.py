@@ -1,0 +1,92 @@
+"""The Cook-Torrance microfacet BRDF with the Beckmann distribution.
+
+References
+----------
+* R. L. Cook, K. E. Torrance, "A reflectance model for computer graphics",
+  ACM TOG 1(1), 1982 (SIGGRAPH 1981), eqs. for ``D`` (Beckmann) and ``G``.
+* P. Beckmann, A. Spizzichino, *The scattering of electromagnetic waves from rough
+  surfaces*, 1963.
+* L. Szirmay-Kalos (ed.), *Theory of Three-Dimensional Computer Graphics*, 1995
+  ([SKe95]), for the V-groove ``G`` as printed in Neumann et al. 1999, eq. 10.
+* Neumann, Neumann, Szirmay-Kalos 1999, eqs. 9-11.
+* B. Walter, S. Marschner, H. Li, K. Torrance, "Microfacet models for refraction
+  through rough surfaces", EGSR 2007, eqs. 20-21 and 28 (normalisation, sampling).
+
+Normalisation.  ``D(h) = exp(-tan^2(delta) / m^2) / (pi m^2 cos^4(delta))``
+integrates to 1 against ``cos(delta) d omega_h`` (the microfacet convention), and
+``f = F D G / (4 (N.L)(N.V))``.  This is the factor in eq. 11 of the pumping-up
+paper, ``1 / (4 pi m^2 cos^4 delta)``.  Cook & Torrance 1982 write
+``D = exp(-tan^2/m^2) / (m^2 cos^4)`` (no ``pi``) and ``f = F D G / (pi (N.L)(N.V))``,
+which is ``4`` times larger for the same ``D`` shape; the later derivation of the
+Jacobian (Walter et al. 2007, eq. 20) gives the ``1/4`` used here.
+"""
+
+from __future__ import annotations
+
+from .. import fresnel, vec, warps
+from ..bxdf import BxDF, above
+from ..ops import PI
+from ..params import Param
+from ..registry import register
+
+GEOMETRY = ("vgroove", "none")
+
+
+def beckmann_d(ops, h, m):
+    """``exp(-tan^2(delta) / m^2) / (pi m^2 cos^4(delta))``, ``cos(delta) = hz``; zero for ``hz <= 0``."""
+    ok = h[2] > 0
+    z = ops.where(ok, h[2], 1.0)
+    z2 = z * z
+    tan2 = (h[0] * h[0] + h[1] * h[1]) / z2
+    return ops.where(ok, ops.exp(-tan2 / (m * m)) / (PI * m * m * z2 * z2), 0.0)
+
+
+def vgroove_g(ops, wi, wo, h):
+    """``min(1, 2 (N.H)(N.V) / (V.H), 2 (N.H)(N.L) / (V.H))`` (Cook & Torrance 1982;
+    pumping-up paper eq. 10).  ``V.H = L.H`` so the formula is symmetric."""
+    vh = vec.dot(wo, h)
+    ok = vh > 0
+    d = ops.where(ok, vh, 1.0)
+    g = ops.minimum(1.0, ops.minimum(2.0 * h[2] * wo[2] / d, 2.0 * h[2] * wi[2] / d))
+    return ops.where(ok, g, 0.0)
+
+
+@register("cook-torrance",
+          "Cook-Torrance (1982) microfacet model, Beckmann D, V-groove G: "
+          "f = F D G / (4 N.L N.V). Albedo grows without bound at grazing incidence for G = 1.",
+          reciprocal=True, energy_conserving=False,
+          references=("Cook & Torrance, ACM TOG 1982", "Neumann et al. 1999, eqs. 9-11",
+                      "Walter et al., EGSR 2007"))
+class CookTorrance(BxDF):
+    """``f = F(wi.h) D(h) G / (4 cos_i cos_o)`` (see the module docstring).
+
+    ``fresnel``: ``"schlick"`` (``R0 = rs``), ``"none"`` (``F = rs``; the papers'
+    ``F = 1`` is ``rs = 1``) or ``"conductor"`` (``eta + i k``).  ``geometry``:
+    ``"vgroove"`` or ``"none"`` (``G = 1``).  Sampling: Beckmann half vector
+    (``p_h = D cos(delta)``), reflected, ``pdf = p_h / (4 wi.h)`` (Walter et al. 2007, eqs. 28, 14).
+    """
+
+    PARAMS = (
+        Param("m", 0.1, 1e-4, 1.0, doc="Beckmann RMS slope m", extremes=(0.01, 0.5)),
+        Param("rs", 1.0, 0.0, 1.0, "color", "specular reflectance / Schlick R0", (0.0, 1.0)),
+        Param("fresnel", "schlick", kind="choice", choices=fresnel.FRESNEL_CHOICES),
+        Param("geometry", "vgroove", kind="choice", choices=GEOMETRY),
+        Param("eta", 0.2, 0.0, 100.0, "color", "conductor index n (fresnel='conductor')"),
+        Param("k", 3.0, 0.0, 100.0, "color", "conductor extinction k (fresnel='conductor')"),
+    )
+
+    def _f(self, ops, wi, wo, p):
+        ok = above(ops, wi, wo)
+        h = vec.half_vector(ops, wi, wo)
+        ci = ops.where(ok, wi[2], 1.0)
+        co = ops.where(ok, wo[2], 1.0)
+        g = vgroove_g(ops, wi, wo, h) if p.geometry == "vgroove" else 1.0
+        F = fresnel.weight(ops, p.fresnel, vec.dot(wi, h), p.rs, p.eta, p.k)
+        return ops.where(ok, F * beckmann_d(ops, h, p.m) * g / (4.0 * ci * co), 0.0)
+
+    def _pdf(self, ops, wi, wo, q):
+        return warps.beckmann_reflected_pdf(ops, wi, wo, q.m, q.m)
+
+    def _sample(self, ops, wi, u, q):
+        h = warps.beckmann_half_vector(ops, q.m, q.m, u[1], u[2])
+        return vec.reflect(wi, h)

@@ -1,0 +1,241 @@
+"""Cook-Torrance (Beckmann, V-groove): normalisation, grazing albedo, sampling, Dr.Jit.
+
+Also holds the deterministic half-vector albedo quadrature shared with test_ward.py.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+import plausible
+from plausible import warps
+from plausible.models.cook_torrance import beckmann_d
+from plausible.ops import NP
+
+
+def _nodes(a, b, n):
+    """Gauss-Legendre on [a, b] through t = (1 - cos(pi s)) / 2 (nodes clustered at both ends)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    s = 0.5 * (x + 1.0)
+    t = 0.5 * (1.0 - np.cos(np.pi * s))
+    return a + (b - a) * t, (b - a) * 0.25 * np.pi * np.sin(np.pi * s) * w
+
+
+def halfvector_albedo(model, theta_i, width, n=200, tails=8.0):
+    """Directional albedo of ``model`` at incidence ``theta_i`` (in the xz plane), integrated over
+    the half vector: ``a = int f cos_o 4 (wi.h) d omega_h`` (d omega_o = 4 (wi.h) d omega_h).
+
+    ``theta_h`` runs over ``[0, atan(tails * width)]`` (a Beckmann/Ward lobe of slope ``width``
+    carries less than ``exp(-tails^2)`` beyond), split where the horizon starts to cut the
+    ``phi`` circle (``theta_h = (pi/2 - theta_i) / 2``); for each ``theta_h`` only the ``phi``
+    with ``wo.z > 0`` are integrated (``|phi| < phi*``, closed form), with ``phi = phi* (1 - v^2)``
+    so that ``sqrt(cos_o)`` behaviour at the horizon is smooth in ``v``.
+    """
+    si, ci = math.sin(theta_i), math.cos(theta_i)
+    wi = np.array([si, 0.0, ci])
+    tmax = math.atan(tails * width)
+    tk = 0.5 * (0.5 * math.pi - theta_i)
+    cuts = [0.0] + ([tk] if 0 < tk < tmax else []) + [tmax]
+    total = 0.0
+    v, wv = _nodes(0.0, 1.0, n)
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        th, wt = _nodes(a, b, n)
+        with np.errstate(all="ignore"):
+            cstar = -ci * np.cos(2 * th) / (np.sin(2 * th) * si) if si > 0 else np.full_like(th, -np.inf)
+        phs = np.arccos(np.clip(np.nan_to_num(cstar, nan=-1.0, neginf=-1.0), -1.0, 1.0))
+        st = np.sin(th)[:, None]
+        for sign in (1.0, -1.0):
+            phi = sign * phs[:, None] * (1.0 - v[None, :] ** 2)
+            jac = phs[:, None] * 2.0 * v[None, :]
+            h = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(th)[:, None]), -1)
+            kh = h @ wi
+            wo = 2.0 * kh[..., None] * h - wi
+            f = model.eval(wi, wo)
+            g = f * np.maximum(wo[..., 2], 0.0) * 4.0 * kh * st
+            total += np.einsum("i,ij,ij,j->", wt, g, jac, wv)
+    return float(total)
+
+
+def mc_albedo(model, theta_i, n=200_000, seed=0):
+    """Monte Carlo albedo with the model's own sampler: mean and standard error of the weight."""
+    wi = np.array([math.sin(theta_i), 0.0, math.cos(theta_i)])
+    u = np.random.default_rng(seed).random((n, 3))
+    w = model.sample(wi, u).weight
+    return float(w.mean()), float(w.std() / math.sqrt(n))
+
+
+def check_sampling(model, wi, n=20_000, seed=1):
+    """weight == f cos / pdf and pdf(wi, wo) == returned pdf for sampled directions."""
+    wi = np.asarray(wi, float) / np.linalg.norm(wi)
+    u = np.random.default_rng(seed).random((n, 3))
+    s = model.sample(wi, u)
+    ok = s.pdf > 0
+    assert ok.mean() > 0.5
+    pdf = model.pdf(wi, s.wo[ok])
+    assert np.allclose(pdf, s.pdf[ok], rtol=1e-10, atol=0)
+    f = model.eval(wi, s.wo[ok])
+    expect = f * (s.wo[ok, 2] / s.pdf[ok])[(...,) + (None,) * (f.ndim - 1)]
+    assert np.allclose(s.weight[ok], expect, rtol=1e-10, atol=1e-300)
+    assert np.all(s.weight[~ok] == 0)
+
+
+def check_reciprocal(model, n=2000, seed=2):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n, 3)); a[:, 2] = np.abs(a[:, 2]) + 1e-3
+    b = rng.normal(size=(n, 3)); b[:, 2] = np.abs(b[:, 2]) + 1e-3
+    fa, fb = model.eval(a, b), model.eval(b, a)
+    assert np.allclose(fa, fb, rtol=1e-11, atol=1e-300)
+
+
+def check_drjit(model, n=500, seed=3):
+    pytest.importorskip("drjit")
+    from drjit.llvm import Float64
+
+    from plausible.ops import drjit_ops
+    ops = drjit_ops()
+    rng = np.random.default_rng(seed)
+    wi = rng.normal(size=(n, 3)); wi[:, 2] = np.abs(wi[:, 2])
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    u = rng.random((n, 3))
+    wo = model.sample(wi, u).wo
+    c = lambda a: tuple(Float64(np.ascontiguousarray(a[:, i])) for i in range(3))  # noqa: E731
+    f_dr = np.array(model._f(ops, c(wi), c(wo), model.p))
+    p_dr = np.array(model._pdf(ops, c(wi), c(wo), model.q))
+    s_dr = np.stack([np.array(x) for x in model._sample(ops, c(wi), c(u), model.q)], -1)
+    s_np = np.stack(np.broadcast_arrays(*model._sample(NP, tuple(wi.T), tuple(u.T), model.q)), -1)
+    assert np.allclose(f_dr, model.eval(wi, wo), rtol=1e-10, atol=1e-12)
+    assert np.allclose(p_dr, model.pdf(wi, wo), rtol=1e-10, atol=1e-12)
+    assert np.allclose(s_dr, s_np, rtol=1e-10, atol=1e-12)
+
+
+ANGLES = [0.0, 60.0, 80.0, 85.0, 89.0, 89.9, 89.99]
+
+
+def ct(**kw):
+    kw.setdefault("m", 0.1)
+    kw.setdefault("fresnel", "none")
+    return plausible.make("cook-torrance", **kw)
+
+
+# -- the distribution ------------------------------------------------------------
+
+@pytest.mark.parametrize("m", [0.05, 0.1, 0.5])
+def test_beckmann_d_integrates_to_one_against_cos(m):
+    val, _ = integrate.quad(lambda t: 2 * math.pi * math.sin(t) * math.cos(t) *
+                            beckmann_d(NP, (math.sin(t), 0.0, math.cos(t)), m),
+                            0, math.pi / 2, points=[math.atan(m)], limit=200, epsabs=1e-13)
+    assert val == pytest.approx(1.0, abs=1e-9)
+
+
+def test_vgroove_g_symmetric_bounded_and_one_near_normal():
+    m = ct(geometry="vgroove")
+    check_reciprocal(m)
+    wi = np.array([0.1, 0.0, 1.0]); wo = np.array([-0.1, 0.05, 1.0])
+    assert m.eval(wi, wo) == pytest.approx(ct(geometry="none").eval(wi, wo), rel=1e-14)
+
+
+# -- the integrator is right (and catches a wrong model) ----------------------------
+
+def test_halfvector_integrator_on_closed_forms():
+    lam = plausible.make("lambertian", rd=0.7)
+    for t in (0.0, 50.0, 85.0):
+        assert halfvector_albedo(lam, math.radians(t), width=1e7, n=300) == pytest.approx(0.7, abs=1e-6)
+    # Microfacet with G = F = 1 at normal incidence: int D cos d omega_h = 1.
+    assert halfvector_albedo(ct(geometry="none"), 0.0, 0.1) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_halfvector_integrator_detects_a_broken_model():
+    class Broken(type(ct())):
+        def _f(self, ops, wi, wo, p):
+            return 1.01 * super()._f(ops, wi, wo, p)
+    b = Broken(m=0.1, fresnel="none", geometry="none")
+    assert abs(halfvector_albedo(b, 0.0, 0.1) - 1.0) > 5e-3
+
+
+# -- section 2.1 of the pumping-up paper: grazing albedo ----------------------------
+
+def test_albedo_without_g_diverges_like_one_over_cos():
+    m = ct(geometry="none")
+    a = {t: halfvector_albedo(m, math.radians(t), 0.1) for t in ANGLES}
+    assert a[0.0] == pytest.approx(1.0, abs=1e-12)
+    # Derived: a(theta) cos(theta) = int P(p, q) (cos - p sin) over wo.z > 0 in slope space, with
+    # Gaussian slopes of variance m^2/2, -> E[max(-p, 0)] = m / (2 sqrt(pi)) at grazing; the
+    # remainder is at most cos(theta).
+    lim = 0.1 / (2 * math.sqrt(math.pi))
+    for t in (89.9, 89.99):
+        c = math.cos(math.radians(t))
+        assert abs(a[t] * c - lim) <= c
+    assert a[89.99] / a[89.9] == pytest.approx(10.0, rel=0.03)
+    assert a[89.99] > 100
+
+
+def test_albedo_with_vgroove_stays_bounded():
+    # Measured, against the paper's claim: the V-groove G (<= 2 (N.H)(N.L)/(V.H)) cancels the
+    # 1/(N.L) of the denominator, and the albedo stays below 1 and returns to 1 at grazing.
+    m = ct(geometry="vgroove")
+    thetas = list(np.linspace(0.0, 89.0, 30)) + ANGLES + [89.999]
+    a = np.array([halfvector_albedo(m, math.radians(t), 0.1) for t in thetas])
+    assert a.max() <= 1.0 + 1e-9
+    assert a.min() > 0.9
+    assert halfvector_albedo(m, math.radians(89.99), 0.1) == pytest.approx(1.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("geometry", ["vgroove", "none"])
+@pytest.mark.parametrize("deg", [30.0, 75.0, 88.0])
+def test_monte_carlo_albedo_matches_quadrature(geometry, deg):
+    m = ct(geometry=geometry)
+    det = halfvector_albedo(m, math.radians(deg), 0.1)
+    mean, err = mc_albedo(m, math.radians(deg))
+    assert abs(mean - det) < 5 * err + 1e-12
+
+
+def test_beckmann_sampler_slopes_are_gaussian():
+    # Closed form: Beckmann slopes -hx/hz, -hy/hz are N(0, m^2/2) (independent truth).
+    from scipy import stats
+    m = 0.3
+    u = np.random.default_rng(5).random((2, 20000))
+    h = warps.beckmann_half_vector(NP, m, m, u[0], u[1])
+    for s in (h[0] / h[2], h[1] / h[2]):
+        assert stats.kstest(s, "norm", args=(0, m / math.sqrt(2))).pvalue > 1e-3
+    # broken input: the wrong width is rejected
+    assert stats.kstest(h[0] / h[2], "norm", args=(0, m)).pvalue < 1e-6
+
+
+# -- contract ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("kw", [dict(), dict(geometry="none"), dict(fresnel="schlick", rs=[0.9, 0.6, 0.3]),
+                                dict(fresnel="conductor", eta=[0.2, 0.9, 1.1], k=[3.5, 2.4, 2.3], m=0.4)])
+def test_reciprocity_and_sampling_consistency(kw):
+    m = ct(**kw)
+    check_reciprocal(m)
+    for wi in ([0.0, 0.0, 1.0], [0.6, 0.2, 0.5], [0.99, 0.0, 0.05]):
+        check_sampling(m, wi)
+
+
+def test_fresnel_choices():
+    wi = np.array([math.sin(1.0), 0.0, math.cos(1.0)]); wo = np.array([-wi[0], 0.0, wi[2]])
+    base = ct(geometry="none").eval(wi, wo)
+    # Schlick at wi.h = cos(theta_i) at the mirror direction.
+    sch = ct(geometry="none", fresnel="schlick", rs=0.04).eval(wi, wo)
+    assert sch == pytest.approx(base * (0.04 + 0.96 * (1 - math.cos(1.0)) ** 5), rel=1e-12)
+    g = ct(geometry="none", fresnel="conductor", eta=0.2, k=3.0).eval(wi, wo)
+    assert g == pytest.approx(base * plausible.fresnel.conductor(NP, math.cos(1.0), 0.2, 3.0), rel=1e-12)
+
+
+def test_bad_inputs():
+    for kw, name in [(dict(m=0.0), "m"), (dict(m=-1), "m"), (dict(rs=1.5), "rs"),
+                     (dict(geometry="smith"), "geometry"), (dict(fresnel="x"), "fresnel")]:
+        with pytest.raises(ValueError, match=name):
+            plausible.make("cook-torrance", **kw)
+
+
+def test_registry_entry():
+    info = plausible.info("cook-torrance")
+    assert info.reciprocal and not info.energy_conserving
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(geometry="none", fresnel="schlick", rs=0.5)])
+def test_numpy_and_drjit_agree(kw):
+    check_drjit(ct(**kw))
