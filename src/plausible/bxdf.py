@@ -180,7 +180,7 @@ class BxDF:
             pdf = np.broadcast_to(self._pdf(NP, split(wi), wo_c, self.q), shape)
             f = self._f(NP, self._color_axis(split(wi)), self._color_axis(wo_c), self.p)
             # a pdf below 1e-250 is a sample that cannot occur (and cos/pdf would overflow)
-            ok = (pdf > 1e-250) & (wo[..., 2] > 0) & (wi[..., 2] > 0)
+            ok = (pdf > 1e-250) & (wo[..., 2] > HORIZON) & (wi[..., 2] > HORIZON)
             ratio = np.where(ok, wo[..., 2] / np.where(ok, pdf, 1.0), 0.0)
             if self.channels:
                 ratio = ratio[..., None]
@@ -205,9 +205,15 @@ def _fmt(v):
     return repr(v)
 
 
+#: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).
+#: Models that divide by ``cos(theta)`` (original Phong/Blinn, Ward, Cook-Torrance
+#: with G = 1) would otherwise overflow for denormal cosines.
+HORIZON = 1e-12
+
+
 def above(ops, wi, wo):
-    """Both directions strictly above the horizon."""
-    return (wi[2] > 0) & (wo[2] > 0)
+    """Both directions above the horizon (``cos(theta) > HORIZON``)."""
+    return (wi[2] > HORIZON) & (wo[2] > HORIZON)
 
 
 __all__ = ["BxDF", "Sample", "Param", "above", "as_directions", "vec"]
