@@ -132,11 +132,7 @@ def reflected_half_vector_pdf(ops, wi, wo, nu, nv):
     inverted; the journal version and the change of measure ``d omega_o =
     4 (wi.h) d omega_h`` agree on this form.)
     """
-    h = vec.half_vector(ops, wi, wo)
-    kh = vec.dot(wi, h)
-    ph = anisotropic_half_vector_pdf(ops, nu, nv, h)
-    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
-    return ops.where(ok, ph / (4.0 * ops.where(ok, kh, 1.0)), 0.0)
+    return reflected_pdf(ops, wi, wo, lambda h: anisotropic_half_vector_pdf(ops, nu, nv, h))
 
 
 def mixture(ops, choose_a, a, b):
@@ -202,11 +198,7 @@ def beckmann_reflected_pdf(ops, wi, wo, ax, ay):
     """Density of ``wo = reflect(wi, h)`` with ``h`` from :func:`beckmann_half_vector`:
     ``p_h(h) / (4 (wi.h))`` (change of measure ``d omega_o = 4 (wi.h) d omega_h``;
     Walter 2005), zero below the horizon."""
-    h = vec.half_vector(ops, wi, wo)
-    kh = vec.dot(wi, h)
-    ph = beckmann_half_vector_pdf(ops, ax, ay, h)
-    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
-    return ops.where(ok, ph / (4.0 * ops.where(ok, kh, 1.0)), 0.0)
+    return reflected_pdf(ops, wi, wo, lambda h: beckmann_half_vector_pdf(ops, ax, ay, h))
 
 
 def reflected_pdf(ops, wi, wo, half_vector_pdf):
