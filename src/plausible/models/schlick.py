@@ -163,7 +163,7 @@ class Schlick(BxDF):
 
     PARAMS = (
         Param("r", 0.2, 1e-3, 1.0, "scalar", "roughness (0 mirror, 1 diffuse)", (1e-3, 1.0)),
-        Param("p", 1.0, 1e-3, 1.0, "scalar", "isotropy (1 isotropic, 0 anisotropic)", (0.01, 0.1)),
+        Param("p", 1.0, 1e-3, 1.0, "scalar", "isotropy (1 isotropic, 0 anisotropic)", (1e-3, 0.1)),
         Param("rs", 0.5, 0.0, 1.0, "color", "Fresnel reflectance at normal incidence", (0.0, 1.0)),
         Param("rd", 0.2, 0.0, 1.0, "color", "Lambertian diffuse reflectance", (0.0, 1.0)),
         Param("azimuth", "normalised", kind="choice", choices=("normalised", "sqrt"),
