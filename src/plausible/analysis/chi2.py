@@ -31,7 +31,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import scipy.stats
 
-from .quadrature import HALF_PI, graded_breaks, hemisphere_grid, panel_rule
+from .quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
 
 
 @dataclass
@@ -85,16 +85,12 @@ def _pdf_grid(model, wi, tn, pn):
 
 def _adaptive_cells(model, wi, n_theta, n_phi, m):
     peaks = model.peak_directions(wi)
-    pilot = hemisphere_grid(wi, peaks, m=8)
-    pdf = model.pdf(wi, pilot.wo)
-    mass = pdf * pilot.weight
-    phi0 = float(pilot.phi[0] + math.pi)  # grid spans [phi0 - pi, phi0 + pi]
+    # graded breakpoints (refined toward the lobe): the pilot rule, and reused inside every cell
+    tb_glob, pb_glob, phi0 = lobe_breaks(wi, peaks)
+    pilot = hemisphere_grid(wi, peaks, m=8, theta_breaks=tb_glob, phi_breaks=pb_glob)
+    mass = model.pdf(wi, pilot.wo) * pilot.weight
     phi_lo, phi_hi = phi0 - math.pi, phi0 + math.pi
     t_edges = _quantile_edges(pilot.theta, mass.sum(axis=1), 0.0, HALF_PI, n_theta)
-    # global graded breakpoints (refined toward the lobe) reused inside every cell
-    full = hemisphere_grid(wi, peaks, m=2)
-    tb_glob = np.unique(np.concatenate([[0.0, HALF_PI], _breaks_from_nodes(full.theta)]))
-    pb_glob = np.unique(np.concatenate([[phi_lo, phi_hi], _breaks_from_nodes(full.phi)]))
     cells = []
     for b in range(len(t_edges) - 1):
         ta, tb = t_edges[b], t_edges[b + 1]
@@ -129,13 +125,6 @@ def _band_expected(model, wi, tbr, pbr, p_edges, m):
     per_phi = vals.sum(axis=0)
     idx = np.clip(np.searchsorted(p_edges, pn, side="right") - 1, 0, len(p_edges) - 2)
     return np.bincount(idx, weights=per_phi, minlength=len(p_edges) - 1)
-
-
-def _breaks_from_nodes(nodes):
-    # composite-rule nodes come in panels of 2 (m=2): recover panel edges as midpoints
-    # between panels; good enough as extra breakpoints.
-    n = nodes.reshape(-1, 2)
-    return 0.5 * (n[:-1, 1] + n[1:, 0])
 
 
 def _fixed_cells(model, wi, n_theta, n_phi, ires=4):

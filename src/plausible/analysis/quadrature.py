@@ -80,9 +80,12 @@ def _angles(d):
     return theta, phi
 
 
-def hemisphere_grid(wi, peaks, m: int = 12, levels: int = 13, theta_range=(0.0, HALF_PI),
-                    theta_breaks=None, phi_breaks=None, refine: int = 1) -> HemisphereGrid:
-    """Build the graded rule for incidence ``wi`` (unit, shape (3,)) and lobe peaks."""
+def lobe_breaks(wi, peaks, levels: int = 13, refine: int = 1, theta_range=(0.0, HALF_PI)):
+    """Panel breakpoints ``(theta_breaks, phi_breaks, phi0)`` for incidence ``wi``
+    (unit, shape (3,)) and lobe ``peaks``: graded toward the peaks' polar angles
+    and ``theta_i`` in ``theta``, toward the peaks' azimuths and the plane of
+    incidence in ``phi``, over ``[phi0 - pi, phi0 + pi]`` with ``phi0`` the first
+    peak's azimuth; ``refine`` multiplies the uniform floor of panels."""
     ti, pi_ = _angles(wi)
     angs = [_angles(p) for p in peaks if np.linalg.norm(p) > 0]
     t_centers = [t for t, _ in angs] + [ti]
@@ -90,10 +93,18 @@ def hemisphere_grid(wi, peaks, m: int = 12, levels: int = 13, theta_range=(0.0, 
     p_centers = [p for t, p in angs if t > 1e-9] + [pi_, pi_ + math.pi]
     # bring the azimuth centres into [phi0 - pi, phi0 + pi]
     p_centers = [phi0 + ((p - phi0 + math.pi) % (2 * math.pi)) - math.pi for p in p_centers]
-    if theta_breaks is None:
-        theta_breaks = graded_breaks(theta_range[0], theta_range[1], t_centers, levels, 8 * refine)
-    if phi_breaks is None:
-        phi_breaks = graded_breaks(phi0 - math.pi, phi0 + math.pi, p_centers, levels, 16 * refine)
+    theta_breaks = graded_breaks(theta_range[0], theta_range[1], t_centers, levels, 8 * refine)
+    phi_breaks = graded_breaks(phi0 - math.pi, phi0 + math.pi, p_centers, levels, 16 * refine)
+    return theta_breaks, phi_breaks, phi0
+
+
+def hemisphere_grid(wi, peaks, m: int = 12, levels: int = 13, theta_range=(0.0, HALF_PI),
+                    theta_breaks=None, phi_breaks=None, refine: int = 1) -> HemisphereGrid:
+    """Build the graded rule for incidence ``wi`` (unit, shape (3,)) and lobe peaks
+    (breakpoints from :func:`lobe_breaks` unless given)."""
+    tb, pb, _ = lobe_breaks(wi, peaks, levels, refine, theta_range)
+    theta_breaks = tb if theta_breaks is None else theta_breaks
+    phi_breaks = pb if phi_breaks is None else phi_breaks
     t, wt = panel_rule(np.asarray(theta_breaks), m)
     p, wp = panel_rule(np.asarray(phi_breaks), m)
     st, ct = np.sin(t), np.cos(t)

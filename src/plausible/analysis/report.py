@@ -7,7 +7,8 @@ import math
 from dataclasses import dataclass, field
 
 from .albedo import direction, is_isotropic
-from .checks import PropertyResult, _jsonable, energy, energy_directions, reciprocity, sampling_consistency
+from .checks import (ENERGY_THETAS, PropertyResult, _jsonable, energy, energy_directions, reciprocity,
+                     sampling_consistency)
 from .chi2 import chi2
 
 #: Incidences (theta, phi in degrees) of the default chi-square tests.
@@ -39,6 +40,14 @@ class CheckReport:
 
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), **kw)
+
+    def as_claimed(self, info) -> bool:
+        """Does the report agree with what the model claims (registry flags)?
+        Sampling and chi-square must always pass; reciprocity and energy must
+        pass when the model claims them."""
+        need = ["sampling", "chi2"] + (["reciprocity"] if info.reciprocal else []) + \
+            (["energy"] if info.energy_conserving else [])
+        return all(self[n].passed for n in need)
 
     def rows(self):
         """(property, figure, bound, verdict, worst case) rows for a table."""
@@ -77,8 +86,8 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     """
     iso = is_isotropic(model)
     chi_dirs = CHI2_DIRECTIONS if iso else CHI2_DIRECTIONS_ANISO
-    thetas = (0, 30, 60, 80, 89.9) if quick else None
-    e_dirs = energy_directions(model, thetas) if thetas else energy_directions(model)
+    thetas = (0, 30, 60, 80, 89.9) if quick else ENERGY_THETAS
+    e_dirs = energy_directions(model, thetas)
     s_thetas = (0, 45, 85) if quick else (0, 30, 60, 80, 89)
     s_phis = (0,) if iso else (0, 45)
     n_s = 20_000 if quick else 50_000
@@ -90,8 +99,7 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24))
     if tick:
         tick()
-    rep.results.append(energy(model, thetas_deg=thetas, progress=tick) if thetas
-                       else energy(model, progress=tick))
+    rep.results.append(energy(model, thetas_deg=thetas, progress=tick))
     rep.results.append(sampling_consistency(model, thetas_deg=s_thetas, phis_deg=s_phis,
                                             n_samples=n_s, progress=tick))
     results = []
