@@ -306,7 +306,7 @@ def make_plugin_class(plugin: str, model_name: str):
             """
             from types import SimpleNamespace
 
-            ops = drjit_ops()
+            ops = drjit_ops(mi.Float)
             q = dict(self._q_const)
             q[name] = mi.Float([0.4, 0.6]) * float(self._q_const[name] or 1.0)
             qn = SimpleNamespace(**q)
@@ -355,7 +355,7 @@ def make_plugin_class(plugin: str, model_name: str):
             return wo_m, wi_m
 
         def _value(self, ctx, si, wo_c):
-            ops = drjit_ops()
+            ops = drjit_ops(mi.Float)
             wi_c = self._split(si.wi)
             light, view = self._f_pair(ctx, wi_c, wo_c)
             f = self.model._f(ops, light, view, self._p(si))
@@ -369,7 +369,7 @@ def make_plugin_class(plugin: str, model_name: str):
             return dr.select(ok, v, 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
-            ops = drjit_ops()
+            ops = drjit_ops(mi.Float)
             pdf = mi.Float(self.model._pdf(ops, self._split(si.wi), self._split(wo), self._q(si)))
             ok = active & (si.wi.z > 0) & (wo.z > 0)
             return dr.select(ok, pdf, 0.0)
@@ -378,7 +378,7 @@ def make_plugin_class(plugin: str, model_name: str):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
-            ops = drjit_ops()
+            ops = drjit_ops(mi.Float)
             q = self._q(si)
             wi_c = self._split(si.wi)
             wo_c = self.model._sample(ops, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q)

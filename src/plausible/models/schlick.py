@@ -84,16 +84,9 @@ def azimuth(ops, hx, hy, p, form):
     return ops.sqrt(a) if form == "sqrt" else a
 
 
-def smith_g(ops, v, r):
-    """``G(v) = v / (r - r v + v)`` (Schlick 1994: rational approximation of
-    Smith's shadowing).  ``v`` is clamped to ``[0, 1]``."""
-    c = ops.minimum(ops.maximum(v, 0.0), 1.0)
-    den = r - r * c + c
-    return ops.where(den > 0, c / ops.where(den > 0, den, 1.0), 0.0)
-
-
 def smith_g_over_v(ops, v, r):
-    """``G(v) / v = 1 / (r - r v + v)``, finite at grazing ``v -> 0`` (where
+    """Schlick 1994's rational approximation of Smith's shadowing,
+    ``G(v) = v / (r - r v + v)``, divided by ``v``: ``G(v) / v = 1 / (r - r v + v)``, finite at grazing ``v -> 0`` (where
     ``G(v) G(v') / (v v')`` computed as written would underflow to 0/0)."""
     c = ops.minimum(ops.maximum(v, 0.0), 1.0)
     den = r - r * c + c

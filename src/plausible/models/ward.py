@@ -99,9 +99,7 @@ class Ward(BxDF):
         return q.rs / s if s > 0 else 0.5
 
     def _f(self, ops, wi, wo, p):
-        # ``+ 0.0 * wi[2]`` makes the branch an array: Dr.Jit's select of two Python floats
-        # under a mask yields a float32 array (measured with Dr.Jit 1.5), losing precision.
-        diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI + 0.0 * wi[2], 0.0)
+        diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
         return diffuse + p.rs * ward_specular(ops, wi, wo, p.alpha_x, p.alpha_y, p.variant)
 
     def _pdf(self, ops, wi, wo, q):
