@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 import plausible
 from conftest import model_cases, random_upper
+from reference import hooks_agree
 
 CASES = model_cases()
 
@@ -148,43 +149,9 @@ def test_contract_properties(name, wi, u):
 
 # ---- one math: the same hooks on Dr.Jit arrays ---------------------------------------
 
-def _drjit():
-    try:
-        import drjit as dr
-        from drjit.llvm import Float64
-        dr.sqrt(Float64(1.0))
-    except Exception as e:  # pragma: no cover - only where Dr.Jit/LLVM is missing
-        pytest.skip(f"Dr.Jit LLVM backend unavailable: {e}")
-    return dr, Float64
-
-
 @pytest.mark.drjit
 @pytest.mark.parametrize("name,kw", CASES)
 def test_numpy_and_drjit_agree(name, kw, rng):
-    dr, Float64 = _drjit()
-    from types import SimpleNamespace
-
-    from plausible.ops import NP, drjit_ops
-
-    ops = drjit_ops(Float64)
-    m = plausible.make(name, **kw)
     n = 256
-    a, b = random_upper(rng, n), random_upper(rng, n)
-    u = rng.random((n, 3))
-    A = tuple(Float64(a[:, i]) for i in range(3))
-    B = tuple(Float64(b[:, i]) for i in range(3))
-    U = tuple(Float64(u[:, i]) for i in range(3))
-    chans = m.channels or 1
-    for c in range(chans):
-        pc = SimpleNamespace(**{k: (float(v[c]) if isinstance(v, np.ndarray) else v) for k, v in vars(m.p).items()})
-        f_np = np.broadcast_to(m._f(NP, tuple(a[:, i] for i in range(3)), tuple(b[:, i] for i in range(3)), pc), (n,))
-        f_dr = np.asarray(m._f(ops, A, B, pc), dtype=np.float64)
-        np.testing.assert_allclose(np.broadcast_to(f_dr, (n,)), f_np, rtol=1e-11, atol=1e-14)
-    p_np = m.pdf(a, b)
-    p_dr = np.broadcast_to(np.asarray(m._pdf(ops, A, B, m.q), dtype=np.float64), (n,))
-    np.testing.assert_allclose(p_dr, p_np, rtol=1e-11, atol=1e-14)
-    w_np = m._sample(NP, tuple(a[:, i] for i in range(3)), tuple(u[:, i] for i in range(3)), m.q)
-    w_dr = m._sample(ops, A, U, m.q)
-    for i in range(3):
-        np.testing.assert_allclose(np.broadcast_to(np.asarray(w_dr[i], dtype=np.float64), (n,)),
-                                   np.broadcast_to(w_np[i], (n,)), rtol=1e-10, atol=1e-12)
+    hooks_agree(plausible.make(name, **kw), random_upper(rng, n), random_upper(rng, n), rng.random((n, 3)),
+                rtol=1e-11, atol=1e-14, rtol_sample=1e-10, atol_sample=1e-12)

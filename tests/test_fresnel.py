@@ -110,7 +110,7 @@ def test_numpy_and_drjit_agree():
     from drjit.llvm import Float64
 
     from plausible.ops import drjit_ops
-    ops = drjit_ops()
+    ops = drjit_ops(Float64)
     c = np.linspace(0.0, 1.0, 33)
     for n, k in [(0.27, 2.78), (1.5, 0.0), (0.7, 0.0)]:
         a = fresnel.conductor(NP, c, n, k)

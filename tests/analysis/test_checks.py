@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible import warps
-from plausible.analysis import albedo, chi2, direction, energy, reciprocity, sampling_consistency
-from plausible.bxdf import BxDF, Sample, above
+from plausible.analysis import chi2, direction, energy, reciprocity, sampling_consistency
+from plausible.bxdf import Sample
 from plausible.models.phong import ReciprocalPhong, lobe_pdf, phong_sample
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mi_helpers import (PLUGIN_MODELS, dr, interaction, mi, moderate, spectrum_np, to_dict,
+from mi_helpers import (PLUGIN_MODELS, interaction, mi, moderate, spectrum_np, to_dict,
                         upper_dirs, vec3)
 
 import plausible

@@ -626,7 +626,7 @@ def test_numpy_and_drjit_agree(model):
 
     from plausible.ops import drjit_ops
 
-    D = drjit_ops()
+    D = drjit_ops(Float64)
     rng = np.random.default_rng(43)
     a, b, u = hemisphere(rng, 4000), hemisphere(rng, 4000), rng.random((4000, 3))
     a[0] = b[0] = [0.0, 0.0, 1.0]  # the pole (0/0 in the exponent)

@@ -1,6 +1,4 @@
 """Cook-Torrance (Beckmann, V-groove): normalisation, grazing albedo, sampling, Dr.Jit.
-
-Also holds the deterministic half-vector albedo quadrature shared with test_ward.py.
 """
 
 import math
@@ -9,105 +7,13 @@ import numpy as np
 import pytest
 from scipy import integrate
 
+from reference import check_drjit, check_reciprocal, check_sampling, halfvector_albedo
+from reference import mc_albedo_at as mc_albedo
+
 import plausible
 from plausible import warps
 from plausible.models.cook_torrance import beckmann_d
 from plausible.ops import NP
-
-
-def _nodes(a, b, n):
-    """Gauss-Legendre on [a, b] through t = (1 - cos(pi s)) / 2 (nodes clustered at both ends)."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    s = 0.5 * (x + 1.0)
-    t = 0.5 * (1.0 - np.cos(np.pi * s))
-    return a + (b - a) * t, (b - a) * 0.25 * np.pi * np.sin(np.pi * s) * w
-
-
-def halfvector_albedo(model, theta_i, width, n=200, tails=8.0):
-    """Directional albedo of ``model`` at incidence ``theta_i`` (in the xz plane), integrated over
-    the half vector: ``a = int f cos_o 4 (wi.h) d omega_h`` (d omega_o = 4 (wi.h) d omega_h).
-
-    ``theta_h`` runs over ``[0, atan(tails * width)]`` (a Beckmann/Ward lobe of slope ``width``
-    carries less than ``exp(-tails^2)`` beyond), split where the horizon starts to cut the
-    ``phi`` circle (``theta_h = (pi/2 - theta_i) / 2``); for each ``theta_h`` only the ``phi``
-    with ``wo.z > 0`` are integrated (``|phi| < phi*``, closed form), with ``phi = phi* (1 - v^2)``
-    so that ``sqrt(cos_o)`` behaviour at the horizon is smooth in ``v``.
-    """
-    si, ci = math.sin(theta_i), math.cos(theta_i)
-    wi = np.array([si, 0.0, ci])
-    tmax = math.atan(tails * width)
-    tk = 0.5 * (0.5 * math.pi - theta_i)
-    cuts = [0.0] + ([tk] if 0 < tk < tmax else []) + [tmax]
-    total = 0.0
-    v, wv = _nodes(0.0, 1.0, n)
-    for a, b in zip(cuts[:-1], cuts[1:]):
-        th, wt = _nodes(a, b, n)
-        with np.errstate(all="ignore"):
-            cstar = -ci * np.cos(2 * th) / (np.sin(2 * th) * si) if si > 0 else np.full_like(th, -np.inf)
-        phs = np.arccos(np.clip(np.nan_to_num(cstar, nan=-1.0, neginf=-1.0), -1.0, 1.0))
-        st = np.sin(th)[:, None]
-        for sign in (1.0, -1.0):
-            phi = sign * phs[:, None] * (1.0 - v[None, :] ** 2)
-            jac = phs[:, None] * 2.0 * v[None, :]
-            h = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(th)[:, None]), -1)
-            kh = h @ wi
-            wo = 2.0 * kh[..., None] * h - wi
-            f = model.eval(wi, wo)
-            g = f * np.maximum(wo[..., 2], 0.0) * 4.0 * kh * st
-            total += np.einsum("i,ij,ij,j->", wt, g, jac, wv)
-    return float(total)
-
-
-def mc_albedo(model, theta_i, n=200_000, seed=0):
-    """Monte Carlo albedo with the model's own sampler: mean and standard error of the weight."""
-    wi = np.array([math.sin(theta_i), 0.0, math.cos(theta_i)])
-    u = np.random.default_rng(seed).random((n, 3))
-    w = model.sample(wi, u).weight
-    return float(w.mean()), float(w.std() / math.sqrt(n))
-
-
-def check_sampling(model, wi, n=20_000, seed=1):
-    """weight == f cos / pdf and pdf(wi, wo) == returned pdf for sampled directions."""
-    wi = np.asarray(wi, float) / np.linalg.norm(wi)
-    u = np.random.default_rng(seed).random((n, 3))
-    s = model.sample(wi, u)
-    ok = s.pdf > 0
-    assert ok.mean() > 0.5
-    pdf = model.pdf(wi, s.wo[ok])
-    assert np.allclose(pdf, s.pdf[ok], rtol=1e-10, atol=0)
-    f = model.eval(wi, s.wo[ok])
-    expect = f * (s.wo[ok, 2] / s.pdf[ok])[(...,) + (None,) * (f.ndim - 1)]
-    assert np.allclose(s.weight[ok], expect, rtol=1e-10, atol=1e-300)
-    assert np.all(s.weight[~ok] == 0)
-
-
-def check_reciprocal(model, n=2000, seed=2):
-    rng = np.random.default_rng(seed)
-    a = rng.normal(size=(n, 3)); a[:, 2] = np.abs(a[:, 2]) + 1e-3
-    b = rng.normal(size=(n, 3)); b[:, 2] = np.abs(b[:, 2]) + 1e-3
-    fa, fb = model.eval(a, b), model.eval(b, a)
-    assert np.allclose(fa, fb, rtol=1e-11, atol=1e-300)
-
-
-def check_drjit(model, n=500, seed=3):
-    pytest.importorskip("drjit")
-    from drjit.llvm import Float64
-
-    from plausible.ops import drjit_ops
-    ops = drjit_ops()
-    rng = np.random.default_rng(seed)
-    wi = rng.normal(size=(n, 3)); wi[:, 2] = np.abs(wi[:, 2])
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    u = rng.random((n, 3))
-    wo = model.sample(wi, u).wo
-    c = lambda a: tuple(Float64(np.ascontiguousarray(a[:, i])) for i in range(3))  # noqa: E731
-    f_dr = np.array(model._f(ops, c(wi), c(wo), model.p))
-    p_dr = np.array(model._pdf(ops, c(wi), c(wo), model.q))
-    s_dr = np.stack([np.array(x) for x in model._sample(ops, c(wi), c(u), model.q)], -1)
-    s_np = np.stack(np.broadcast_arrays(*model._sample(NP, tuple(wi.T), tuple(u.T), model.q)), -1)
-    assert np.allclose(f_dr, model.eval(wi, wo), rtol=1e-10, atol=1e-12)
-    assert np.allclose(p_dr, model.pdf(wi, wo), rtol=1e-10, atol=1e-12)
-    assert np.allclose(s_dr, s_np, rtol=1e-10, atol=1e-12)
 
 
 ANGLES = [0.0, 60.0, 80.0, 85.0, 89.0, 89.9, 89.99]

@@ -1,0 +1,210 @@
+"""Independent reference methods shared by the model tests: tensor Gauss-Legendre
+quadrature over the hemisphere, a half-vector albedo quadrature for microfacet
+lobes, Monte Carlo with a model's own sampler, a fixed-grid chi-square test, and
+the contract's consistency checks.  None of them uses :mod:`plausible.analysis`,
+so they are a second method to test it and the models against."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import special, stats
+
+from plausible.ops import NP
+
+TWO_PI = 2.0 * math.pi
+
+
+def unit(v):
+    v = np.asarray(v, dtype=np.float64)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def from_angles(theta_deg, phi_deg=0.0):
+    t, p = math.radians(theta_deg), math.radians(phi_deg)
+    return np.array([math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)])
+
+
+def hemisphere_rule(nmu, nphi, mu=(0.0, 1.0), phi=(0.0, TWO_PI)):
+    """Gauss-Legendre in ``cos(theta)`` times Gauss-Legendre in ``phi``:
+    directions (N, 3) and solid-angle weights (N,)."""
+    xm, wm = special.roots_legendre(nmu)
+    xp, wp = special.roots_legendre(nphi)
+    m = 0.5 * (mu[1] - mu[0]) * xm + 0.5 * (mu[1] + mu[0])
+    wm = 0.5 * (mu[1] - mu[0]) * wm
+    ph = 0.5 * (phi[1] - phi[0]) * xp + 0.5 * (phi[1] + phi[0])
+    wp = 0.5 * (phi[1] - phi[0]) * wp
+    M, P = np.meshgrid(m, ph, indexing="ij")
+    s = np.sqrt(1.0 - M * M)
+    dirs = np.stack([s * np.cos(P), s * np.sin(P), M], axis=-1).reshape(-1, 3)
+    return dirs, np.outer(wm, wp).reshape(-1)
+
+
+def quad_albedo(model, wi, nmu=200, nphi=400):
+    dirs, w = hemisphere_rule(nmu, nphi)
+    f = model.eval(wi, dirs)
+    return float(np.sum(f * dirs[:, 2] * w))
+
+
+def mc_albedo(model, wi, n=200_000, seed=1):
+    u = np.random.default_rng(seed).random((n, 3))
+    w = model.sample(wi, u).weight
+    return float(w.mean()), float(w.std() / math.sqrt(n))
+
+
+def chi2_sampler_pvalue(model, wi, n=100_000, nmu=10, nphi=20, seed=7, sub=12):
+    """Chi-square test of ``model.sample`` against ``model.pdf``.
+
+    Cells of equal solid angle (uniform in ``cos(theta)`` and ``phi``), each
+    cell's expected count from a ``sub x sub`` Gauss-Legendre rule on the pdf,
+    one more cell for samples rejected below the horizon (expected: the mass
+    the pdf misses on the hemisphere); cells expecting fewer than 5 are pooled.
+    """
+    u = np.random.default_rng(seed).random((n, 3))
+    s = model.sample(wi, u)
+    ok = s.pdf > 0
+    wo = s.wo[ok]
+    phi = np.mod(np.arctan2(wo[:, 1], wo[:, 0]), TWO_PI)
+    mu_edges = np.linspace(0.0, 1.0, nmu + 1)
+    phi_edges = np.linspace(0.0, TWO_PI, nphi + 1)
+    obs, _, _ = np.histogram2d(wo[:, 2], phi, bins=[mu_edges, phi_edges])
+    exp = np.empty((nmu, nphi))
+    for i in range(nmu):
+        for j in range(nphi):
+            d, w = hemisphere_rule(sub, sub, (mu_edges[i], mu_edges[i + 1]),
+                                   (phi_edges[j], phi_edges[j + 1]))
+            exp[i, j] = np.sum(model.pdf(wi, d) * w)
+    obs = np.append(obs.ravel(), n - ok.sum())
+    exp = np.append(exp.ravel() * n, n * (1.0 - exp.sum()))
+    exp = np.maximum(exp, 0.0)
+    small = exp < 5
+    if small.any():
+        obs = np.append(obs[~small], obs[small].sum())
+        exp = np.append(exp[~small], exp[small].sum())
+    keep = exp > 0
+    assert np.all(obs[~keep] == 0), "samples where the pdf is zero"
+    chi2 = float(np.sum((obs[keep] - exp[keep]) ** 2 / exp[keep]))
+    return float(stats.chi2.sf(chi2, keep.sum() - 1))
+
+
+def _nodes(a, b, n):
+    """Gauss-Legendre on [a, b] through t = (1 - cos(pi s)) / 2 (nodes clustered at both ends)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    s = 0.5 * (x + 1.0)
+    t = 0.5 * (1.0 - np.cos(np.pi * s))
+    return a + (b - a) * t, (b - a) * 0.25 * np.pi * np.sin(np.pi * s) * w
+
+
+def halfvector_albedo(model, theta_i, width, n=200, tails=8.0):
+    """Directional albedo of ``model`` at incidence ``theta_i`` (in the xz plane), integrated over
+    the half vector: ``a = int f cos_o 4 (wi.h) d omega_h`` (d omega_o = 4 (wi.h) d omega_h).
+
+    ``theta_h`` runs over ``[0, atan(tails * width)]`` (a Beckmann/Ward lobe of slope ``width``
+    carries less than ``exp(-tails^2)`` beyond), split where the horizon starts to cut the
+    ``phi`` circle (``theta_h = (pi/2 - theta_i) / 2``); for each ``theta_h`` only the ``phi``
+    with ``wo.z > 0`` are integrated (``|phi| < phi*``, closed form), with ``phi = phi* (1 - v^2)``
+    so that ``sqrt(cos_o)`` behaviour at the horizon is smooth in ``v``.
+    """
+    si, ci = math.sin(theta_i), math.cos(theta_i)
+    wi = np.array([si, 0.0, ci])
+    tmax = math.atan(tails * width)
+    tk = 0.5 * (0.5 * math.pi - theta_i)
+    cuts = [0.0] + ([tk] if 0 < tk < tmax else []) + [tmax]
+    total = 0.0
+    v, wv = _nodes(0.0, 1.0, n)
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        th, wt = _nodes(a, b, n)
+        with np.errstate(all="ignore"):
+            cstar = -ci * np.cos(2 * th) / (np.sin(2 * th) * si) if si > 0 else np.full_like(th, -np.inf)
+        phs = np.arccos(np.clip(np.nan_to_num(cstar, nan=-1.0, neginf=-1.0), -1.0, 1.0))
+        st = np.sin(th)[:, None]
+        for sign in (1.0, -1.0):
+            phi = sign * phs[:, None] * (1.0 - v[None, :] ** 2)
+            jac = phs[:, None] * 2.0 * v[None, :]
+            h = np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(th)[:, None]), -1)
+            kh = h @ wi
+            wo = 2.0 * kh[..., None] * h - wi
+            f = model.eval(wi, wo)
+            g = f * np.maximum(wo[..., 2], 0.0) * 4.0 * kh * st
+            total += np.einsum("i,ij,ij,j->", wt, g, jac, wv)
+    return float(total)
+
+
+def mc_albedo_at(model, theta_i, n=200_000, seed=0):
+    """Monte Carlo albedo with the model's own sampler: mean and standard error of the weight."""
+    wi = np.array([math.sin(theta_i), 0.0, math.cos(theta_i)])
+    u = np.random.default_rng(seed).random((n, 3))
+    w = model.sample(wi, u).weight
+    return float(w.mean()), float(w.std() / math.sqrt(n))
+
+
+def check_sampling(model, wi, n=20_000, seed=1):
+    """weight == f cos / pdf and pdf(wi, wo) == returned pdf for sampled directions."""
+    wi = np.asarray(wi, float) / np.linalg.norm(wi)
+    u = np.random.default_rng(seed).random((n, 3))
+    s = model.sample(wi, u)
+    ok = s.pdf > 0
+    assert ok.mean() > 0.5
+    pdf = model.pdf(wi, s.wo[ok])
+    assert np.allclose(pdf, s.pdf[ok], rtol=1e-10, atol=0)
+    f = model.eval(wi, s.wo[ok])
+    expect = f * (s.wo[ok, 2] / s.pdf[ok])[(...,) + (None,) * (f.ndim - 1)]
+    assert np.allclose(s.weight[ok], expect, rtol=1e-10, atol=1e-300)
+    assert np.all(s.weight[~ok] == 0)
+
+
+def check_reciprocal(model, n=2000, seed=2):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n, 3)); a[:, 2] = np.abs(a[:, 2]) + 1e-3
+    b = rng.normal(size=(n, 3)); b[:, 2] = np.abs(b[:, 2]) + 1e-3
+    fa, fb = model.eval(a, b), model.eval(b, a)
+    assert np.allclose(fa, fb, rtol=1e-11, atol=1e-300)
+
+
+def hooks_agree(model, wi, wo, u, *, rtol=1e-12, atol=1e-300, rtol_sample=1e-9, atol_sample=1e-12):
+    """The one-math rule: ``_f`` (per colour channel), ``_pdf`` and ``_sample`` give
+    the same numbers on ``drjit.llvm.Float64`` arrays as on NumPy.  Skips where
+    Dr.Jit's LLVM backend is missing.  Returns the NumPy pdf and sample."""
+    try:
+        from drjit.llvm import Float64
+        Float64(1.0) + 1.0
+    except Exception as e:  # pragma: no cover - only where Dr.Jit/LLVM is missing
+        pytest.skip(f"Dr.Jit LLVM backend unavailable: {e}")
+    from types import SimpleNamespace
+
+    from plausible.ops import drjit_ops
+
+    ops = drjit_ops(Float64)
+    n = len(wi)
+
+    def comp(a):
+        return tuple(np.ascontiguousarray(a[:, k]) for k in range(3))
+
+    def dcomp(a):
+        return tuple(Float64(x) for x in comp(a))
+
+    for c in range(model.channels or 1):
+        pc = SimpleNamespace(**{k: (float(v[c]) if isinstance(v, np.ndarray) else v)
+                                for k, v in vars(model.p).items()})
+        ref = np.broadcast_to(model._f(NP, comp(wi), comp(wo), pc), (n,))
+        got = np.broadcast_to(np.asarray(model._f(ops, dcomp(wi), dcomp(wo), pc), dtype=np.float64), (n,))
+        np.testing.assert_allclose(got, ref, rtol=rtol, atol=atol)
+    pdf = np.broadcast_to(model._pdf(NP, comp(wi), comp(wo), model.q), (n,))
+    got = np.broadcast_to(np.asarray(model._pdf(ops, dcomp(wi), dcomp(wo), model.q), dtype=np.float64), (n,))
+    np.testing.assert_allclose(got, pdf, rtol=rtol, atol=atol)
+    smp = model._sample(NP, comp(wi), comp(u), model.q)
+    got = model._sample(ops, dcomp(wi), dcomp(u), model.q)
+    for r, g in zip(smp, got):
+        np.testing.assert_allclose(np.broadcast_to(np.asarray(g, dtype=np.float64), (n,)),
+                                   np.broadcast_to(r, (n,)), rtol=rtol_sample, atol=atol_sample)
+    return pdf, smp
+
+
+def check_drjit(model, n=500, seed=3):
+    """:func:`hooks_agree` on random incidences and directions from the model's sampler."""
+    rng = np.random.default_rng(seed)
+    wi = rng.normal(size=(n, 3)); wi[:, 2] = np.abs(wi[:, 2])
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    u = rng.random((n, 3))
+    wo = model.sample(wi, u).wo
+    hooks_agree(model, wi, wo, u, rtol=1e-10, atol=1e-12, rtol_sample=1e-10, atol_sample=1e-12)
