@@ -79,7 +79,7 @@ def main():
 def models():
     """List every registered model with its parameters, defaults and ranges."""
     t = Table(title="registered models", show_lines=True)
-    t.add_column("model", style="bold")
+    t.add_column("model", style="bold", no_wrap=True, min_width=max(map(len, registry.names())))
     t.add_column("parameters (default, range)")
     t.add_column("description")
     for name in registry.names():
@@ -171,11 +171,9 @@ def albedo(models, params, plot, phi, points):
     from .plotting import default_thetas, plot_albedo_curves
 
     th = default_thetas(points)
-    curves = []
-    for spec in models:
-        m = _model(spec, params)
-        res = albedo_curve(m, th, math.radians(phi))
-        curves.append((repr(m), th, res))
+    targets = [_model(spec, params) for spec in models]
+    tick = _Bar("albedo")(len(targets) * len(th))
+    curves = [(repr(m), th, albedo_curve(m, th, math.radians(phi), progress=tick)) for m in targets]
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
     for label, _, _ in curves:

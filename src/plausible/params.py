@@ -96,7 +96,12 @@ class ModelInfo:
 
 
 def parse_value(text: str):
-    """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour) or a word."""
+    """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour), groups
+    separated by ``;`` (``-1,-1,1,20,1.5;1,1,1,8,0.3``: a list of tuples, e.g.
+    Lafortune's lobes) or a word."""
+    if ";" in text:
+        groups = [parse_value(g) for g in text.split(";") if g.strip()]
+        return [g if isinstance(g, list) else [g] for g in groups]
     parts = [t.strip() for t in text.split(",")]
     try:
         nums = [float(t) for t in parts]

@@ -104,16 +104,21 @@ def pdf_integral(model, wi, *, m: int = 12, m_low: int = 8, levels: int = 13,
     return AlbedoResult(float(hi), float(err))
 
 
-def albedo_curve(model, thetas, phi: float = 0.0, **kw) -> AlbedoResult:
+def albedo_curve(model, thetas, phi: float = 0.0, progress=None, **kw) -> AlbedoResult:
     """Directional albedo at polar angles ``thetas`` (radians) and azimuth ``phi``.
 
     Returns an :class:`AlbedoResult` whose ``value``/``error`` have shape
-    ``(len(thetas),)`` (plus a channel axis for colour models).
+    ``(len(thetas),)`` (plus a channel axis for colour models).  ``progress``, if
+    given, is called with no argument after each angle.
     """
     thetas = np.atleast_1d(np.asarray(thetas, dtype=np.float64))
     if np.any(~np.isfinite(thetas)) or np.any(thetas < 0) or np.any(thetas > math.pi / 2):
         raise ValueError("thetas must lie in [0, pi/2] radians")
-    res = [albedo(model, direction(t, phi), **kw) for t in thetas]
+    res = []
+    for t in thetas:
+        res.append(albedo(model, direction(t, phi), **kw))
+        if progress:
+            progress()
     return AlbedoResult(np.array([r.value for r in res]), np.array([r.error for r in res]))
 
 
