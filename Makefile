@@ -39,7 +39,9 @@ test-all: setup
 	$(BIN)/python -m pytest -q -n $(JOBS)
 
 bench: setup
-	$(BIN)/python -m pytest -q benchmarks --benchmark-only -p no:xdist
+	mkdir -p $(OUT)
+	$(BIN)/python -m pytest -q benchmarks --benchmark-only -p no:xdist --benchmark-json=$(OUT)/bench.json
+	$(BIN)/python benchmarks/report.py $(OUT)/bench.json > $(OUT)/benchmarks.md
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache

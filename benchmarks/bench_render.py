@@ -14,6 +14,7 @@ import statistics
 import time
 
 import mitsuba as mi
+import pytest
 
 
 def scene(bsdf: dict, res: int, spp: int):
@@ -73,3 +74,56 @@ def main():
 
 if __name__ == "__main__":
     main()
+
+
+# -- the same comparison as pytest-benchmark tests (``make bench``) ----------------
+
+A_S = {"type": "ashikhmin_shirley", "nu": 48.0, "nv": 48.0, "rd": 0.0,
+       "rs": {"type": "rgb", "value": [0.9, 0.6, 0.3]}}
+RC = {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.2,
+      "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]}}
+
+
+def furnace_scene(bsdf: dict, res: int = 64, spp: int = 64):
+    """A unit sphere in a constant white environment (the white furnace), orthographic view."""
+    return mi.load_dict({
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 4},
+        "sensor": {"type": "orthographic",
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0])
+                   @ mi.ScalarTransform4f().scale([1.1, 1.1, 1.0]),
+                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": spp}},
+        "sphere": {"type": "sphere", "radius": 1.0, "bsdf": bsdf},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+    })
+
+
+def _render(sc, seed):
+    mi.render(sc, seed=seed).numpy()
+
+
+@pytest.mark.parametrize("bsdf", ["roughconductor", "ashikhmin_shirley"])
+def test_render_scene(benchmark, request, bsdf):
+    """The scene above, 128x128, 64 spp, with each BSDF (3 renders after one
+    first render that includes tracing and compilation)."""
+    request.getfixturevalue("mi")
+    from conftest import first_call, record
+
+    sc = scene({"roughconductor": RC, "ashikhmin_shirley": A_S}[bsdf], 128, 64)
+    record(benchmark, "render", f"scene 128x128 64spp ({bsdf})", backend="mitsuba", op="render",
+           n=128 * 128 * 64, first_call_s=first_call(lambda: _render(sc, 0)))
+    benchmark.pedantic(lambda: _render(sc, 1), rounds=3, iterations=1)
+
+
+def test_furnace_render(benchmark, request):
+    """White furnace: Ashikhmin-Shirley plugin on a sphere in a constant white
+    environment, 64x64, 64 spp."""
+    request.getfixturevalue("mi")
+    from conftest import first_call, record
+
+    sc = furnace_scene({"type": "ashikhmin_shirley", "nu": 20.0, "nv": 80.0, "rs": 0.3, "rd": 0.5})
+    record(benchmark, "render", "furnace 64x64 64spp (ashikhmin_shirley)", backend="mitsuba", op="render",
+           n=64 * 64 * 64, first_call_s=first_call(lambda: _render(sc, 0)))
+    benchmark.pedantic(lambda: _render(sc, 1), rounds=3, iterations=1)
+

@@ -52,20 +52,125 @@ class Sample(NamedTuple):
     pdf: np.ndarray
 
 
-def as_directions(name: str, w) -> np.ndarray:
-    """Validate and normalise an array of directions of shape ``(..., 3)``."""
+def _as_array(name: str, w) -> np.ndarray:
+    """``w`` as a float64 array of shape ``(..., 3)`` (not normalised)."""
     try:
         a = np.asarray(w, dtype=np.float64)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a float array of shape (..., 3)") from None
     if a.ndim == 0 or a.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3), got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    return a
+
+
+def _blocks(a: np.ndarray):
+    """``a`` of shape ``(..., 3)`` as consecutive ``(<= CHUNK, 3)`` row blocks."""
+    rows = a.reshape(-1, 3)
+    for s in range(0, max(len(rows), 1), CHUNK):
+        yield rows[s:s + CHUNK]
+
+
+def _norm2(a: np.ndarray) -> np.ndarray:
+    """``x^2 + y^2 + z^2`` over the last axis, summed left to right: bitwise the
+    value of ``np.sum(a * a, axis=-1)`` (a length-3 reduction adds in order),
+    without NumPy's slow reduction over a short last axis."""
+    x, y, z = a[..., 0], a[..., 1], a[..., 2]
+    return x * x + y * y + z * z
+
+
+def _check_block(name: str, b: np.ndarray, check_zero: bool = True):
+    s = _norm2(b)
+    if not np.all(np.isfinite(s)) and not np.all(np.isfinite(b)):
         raise ValueError(f"{name} must be finite (found NaN or inf)")
-    n = np.sqrt(np.sum(a * a, axis=-1, keepdims=True))
-    if np.any(n == 0):
+    if check_zero and np.any(s == 0):
         raise ValueError(f"{name} must be non-zero vectors (a zero vector has no direction)")
-    return a / n
+    return s
+
+
+def _check_directions(name: str, a: np.ndarray) -> None:
+    """The checks of :func:`as_directions`, in its order (a NaN anywhere before a
+    zero vector anywhere), ``CHUNK`` rows at a time (so that checking allocates
+    O(CHUNK), not O(N), temporaries)."""
+    for b in _blocks(a):
+        _check_block(name, b, check_zero=False)
+    for b in _blocks(a):
+        _check_block(name, b)
+
+
+def _normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
+    """``a / |a|`` (``s``: ``_norm2(a)`` if already computed)."""
+    return a / np.sqrt(_norm2(a) if s is None else s)[..., None]
+
+
+def _checked_unit(name: str, a: np.ndarray) -> np.ndarray:
+    """:func:`_check_directions` and :func:`_normalise` in one pass (batches of at
+    most ``CHUNK`` rows)."""
+    return _normalise(a, _check_block(name, a))
+
+
+def as_directions(name: str, w) -> np.ndarray:
+    """Validate and normalise an array of directions of shape ``(..., 3)``."""
+    a = _as_array(name, w)
+    if a.size <= 3 * CHUNK:
+        return _checked_unit(name, a)
+    _check_directions(name, a)
+    return _normalise(a)
+
+
+def _prepare(name: str, w):
+    """Validate ``w``; return ``(array, unit)``: normalised (``unit`` True) when it
+    has at most ``CHUNK`` rows, else raw (checked by blocks; the caller normalises
+    chunk by chunk, so no O(N) normalised copy exists)."""
+    a = _as_array(name, w)
+    if a.size <= 3 * CHUNK:
+        return _checked_unit(name, a), True
+    _check_directions(name, a)
+    return a, False
+
+
+def _unit_fn(unit: bool):
+    return (lambda a: a) if unit else _normalise
+
+
+def _as_unit_interval(u) -> np.ndarray:
+    """``u`` as a float64 array of shape ``(..., 3)`` in ``[0, 1]`` (checked by blocks)."""
+    try:
+        u = np.asarray(u, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("u must be a float array of shape (..., 3)") from None
+    if u.ndim == 0 or u.shape[-1] != 3:
+        raise ValueError(f"u must have shape (..., 3), got {u.shape}")
+    for b in _blocks(u):
+        if not np.all((b >= 0) & (b <= 1)):
+            raise ValueError("u must lie in [0, 1]")
+    return u
+
+
+def _flat_rows(a: np.ndarray, shape: tuple, n: int):
+    """A function ``(start, stop) -> rows`` reading ``a`` broadcast to ``shape + (3,)``
+    as ``n`` flattened rows, without materialising the broadcast array: a view
+    when the broadcast reshapes without a copy, else a gather of just those rows."""
+    b = np.broadcast_to(a, shape + (3,))
+    try:
+        flat = np.reshape(b, (n, 3), copy=False)
+        return lambda s, e: flat[s:e]
+    except ValueError:
+        return lambda s, e: b[np.unravel_index(np.arange(s, e), shape)]
+
+
+def _chunked(shape: tuple, arrays, block, outs):
+    """Run ``block(*chunk_arrays, chunk_shape)`` on ``CHUNK``-row slices of the
+    flattened broadcast ``arrays`` and write its results into ``outs``
+    (preallocated, flattened, one per result).  Peak memory: the outputs plus
+    the temporaries of one chunk."""
+    n = int(np.prod(shape))
+    readers = [_flat_rows(a, shape, n) for a in arrays]
+    for s in range(0, n, CHUNK):
+        e = min(s + CHUNK, n)
+        res = block(*(r(s, e) for r in readers), (e - s,))
+        for o, r in zip(outs, res if isinstance(res, tuple) else (res,)):
+            o[s:e] = r
+        del res, r  # free this chunk's results before the next chunk allocates its own
 
 
 def split(a):
@@ -137,44 +242,70 @@ class BxDF:
             return c
         return tuple(x[..., None] for x in c)
 
+    def _out_shape(self, shape):
+        return shape + ((self.channels,) if self.channels else ())
+
     def eval(self, wi, wo) -> np.ndarray:
-        """BRDF value ``f(wi, wo)`` (no cosine factor)."""
-        wi = as_directions("wi", wi)
-        wo = as_directions("wo", wo)
+        """BRDF value ``f(wi, wo)`` (no cosine factor).  Batches of more than
+        :data:`CHUNK` pairs are evaluated ``CHUNK`` pairs at a time."""
+        (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
+        n = int(np.prod(shape))
+        if n <= CHUNK:
+            return self._eval_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape)
+        out = np.empty((n,) + self._out_shape(())[:1])
+        ni, no = _unit_fn(wi_unit), _unit_fn(wo_unit)
+        _chunked(shape, (wi, wo), lambda a, b, sh: self._eval_block(ni(a), no(b), sh), (out,))
+        return out.reshape(self._out_shape(shape))
+
+    def _eval_block(self, wi, wo, shape):
         with np.errstate(all="ignore"):
             v = self._f(NP, self._color_axis(split(wi)), self._color_axis(split(wo)), self.p)
-        out_shape = shape + ((self.channels,) if self.channels else ())
-        return np.array(np.broadcast_to(v, out_shape), dtype=np.float64)
+        return np.array(np.broadcast_to(v, self._out_shape(shape)), dtype=np.float64)
 
     def pdf(self, wi, wo) -> np.ndarray:
-        """Solid-angle density of :meth:`sample` producing ``wo`` from ``wi``."""
-        wi = as_directions("wi", wi)
-        wo = as_directions("wo", wo)
+        """Solid-angle density of :meth:`sample` producing ``wo`` from ``wi``
+        (chunked like :meth:`eval`)."""
+        (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
+        n = int(np.prod(shape))
+        if n <= CHUNK:
+            return self._pdf_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape)
+        out = np.empty(n)
+        ni, no = _unit_fn(wi_unit), _unit_fn(wo_unit)
+        _chunked(shape, (wi, wo), lambda a, b, sh: self._pdf_block(ni(a), no(b), sh), (out,))
+        return out.reshape(shape)
+
+    def _pdf_block(self, wi, wo, shape):
         with np.errstate(all="ignore"):
             v = self._pdf(NP, split(wi), split(wo), self.q)
         return np.array(np.broadcast_to(v, shape), dtype=np.float64)
 
     def sample(self, wi, u) -> Sample:
-        """Importance-sample ``wo`` given ``wi`` from uniform numbers ``u`` (..., 3)."""
-        wi = as_directions("wi", wi)
-        try:
-            u = np.asarray(u, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError("u must be a float array of shape (..., 3)") from None
-        if u.ndim == 0 or u.shape[-1] != 3:
-            raise ValueError(f"u must have shape (..., 3), got {u.shape}")
-        if not np.all((u >= 0) & (u <= 1)):
-            raise ValueError("u must lie in [0, 1]")
+        """Importance-sample ``wo`` given ``wi`` from uniform numbers ``u`` (..., 3)
+        (chunked like :meth:`eval`)."""
+        wi, wi_unit = _prepare("wi", wi)
+        u = _as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
+        n = int(np.prod(shape))
+        ni = _unit_fn(wi_unit)
+        if n <= CHUNK:
+            return self._sample_block(ni(wi), u, shape)
+        wo = np.empty((n, 3))
+        weight = np.empty((n,) + self._out_shape(())[:1])
+        pdf = np.empty(n)
+        _chunked(shape, (wi, u), lambda a, b, sh: tuple(self._sample_block(ni(a), b, sh)),
+                 (wo, weight, pdf))
+        return Sample(wo.reshape(shape + (3,)), weight.reshape(self._out_shape(shape)), pdf.reshape(shape))
+
+    def _sample_block(self, wi, u, shape) -> Sample:
         wi = np.broadcast_to(wi, shape + (3,))
         u = np.broadcast_to(u, shape + (3,))
         with np.errstate(all="ignore"):
             wo_c = self._sample(NP, split(wi), split(u), self.q)
             wo = stack(wo_c)
             wo = np.broadcast_to(wo, shape + (3,))
-            n = np.sqrt(np.sum(wo * wo, axis=-1, keepdims=True))
+            n = np.sqrt(_norm2(wo))[..., None]
             wo = np.where(n > 0, wo / np.where(n > 0, n, 1.0), np.array([0.0, 0.0, -1.0]))
             wo_c = split(wo)
             pdf = np.broadcast_to(self._pdf(NP, split(wi), wo_c, self.q), shape)
@@ -184,7 +315,7 @@ class BxDF:
             ratio = np.where(ok, wo[..., 2] / np.where(ok, pdf, 1.0), 0.0)
             if self.channels:
                 ratio = ratio[..., None]
-            out_shape = shape + ((self.channels,) if self.channels else ())
+            out_shape = self._out_shape(shape)
             weight = np.broadcast_to(f * ratio, out_shape)
             weight = np.where(np.broadcast_to(ok[..., None] if self.channels else ok, out_shape),
                               weight, 0.0)
