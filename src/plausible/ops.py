@@ -16,6 +16,9 @@ The namespaces smooth over the differences that bite (measured with Dr.Jit 1.5):
 * ``power(b, e)`` is defined for ``b >= 0`` only, with ``0**0 == 1``;
   ``dr.power(0, 0)`` is NaN and ``dr.power`` of a negative base is garbage, so
   callers clamp the base with ``maximum(b, 0)``.
+* ``table(values)`` turns a 1-D sequence of constants into the backend's
+  array and ``gather(table, index)`` reads it at whole-number float indices
+  (tabulated functions, e.g. the albedo of :mod:`plausible.models.pumped_up`).
 * ``log1p`` exists in NumPy but not in Dr.Jit; the Dr.Jit version uses the
   classic compensated formula ``log(u) * x / (u - 1)`` with ``u = 1 + x``.
 """
@@ -39,6 +42,14 @@ def _np_select(cond, a, b):
     return np.where(cond, a, b)
 
 
+def _np_table(values):
+    return np.ascontiguousarray(values, dtype=np.float64)
+
+
+def _np_gather(table, index):
+    return table[np.asarray(index).astype(np.int64)]
+
+
 NP = SimpleNamespace(
     name="numpy",
     sqrt=np.sqrt,
@@ -54,7 +65,11 @@ NP = SimpleNamespace(
     cos=np.cos,
     tan=np.tan,
     atan2=np.arctan2,
+    acos=np.arccos,
+    floor=np.floor,
     clip=np.clip,
+    table=_np_table,
+    gather=_np_gather,
 )
 """The NumPy namespace (float64)."""
 
@@ -89,6 +104,17 @@ def drjit_ops(float_type=None) -> SimpleNamespace:
             a = float_type(a)
         return dr.select(cond, a, b)
 
+    def table(values):
+        # a 1-D table of constants for :func:`gather` (float_type, else Float64 of LLVM)
+        t = float_type if float_type is not None else dr.llvm.Float64
+        return t(np.ascontiguousarray(values, dtype=np.float64).ravel())
+
+    def gather(tab, index):
+        # ``index`` holds whole numbers as floats (see ``floor``); Dr.Jit needs UInt32
+        idx = dr.uint32_array_t(type(index))(index) if not isinstance(index, (int, float)) \
+            else int(index)
+        return dr.gather(type(tab), tab, idx)
+
     ns = SimpleNamespace(
         name="drjit",
         sqrt=dr.sqrt,
@@ -104,7 +130,11 @@ def drjit_ops(float_type=None) -> SimpleNamespace:
         cos=dr.cos,
         tan=dr.tan,
         atan2=dr.atan2,
+        acos=dr.acos,
+        floor=dr.floor,
         clip=dr.clip,
+        table=table,
+        gather=gather,
     )
     _DR_CACHE[key] = ns
     return ns

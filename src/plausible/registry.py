@@ -77,9 +77,37 @@ def parse_assignments(items) -> dict:
     return out
 
 
+def split_spec(spec: str) -> list[str]:
+    """Split ``"name:k=v:k=[name2:k=v]"`` at the colons outside square brackets
+    (a bracketed value is a nested spec, e.g. the base of ``pumped-up``); the
+    brackets are removed."""
+    parts, depth, cur = [], 0, ""
+    for ch in spec:
+        if ch == "[":
+            depth += 1
+            if depth == 1:
+                continue
+        elif ch == "]":
+            depth -= 1
+            if depth < 0:
+                raise ValueError(f"unbalanced ']' in model spec {spec!r}")
+            if depth == 0:
+                continue
+        if ch == ":" and depth == 0:
+            parts.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    if depth:
+        raise ValueError(f"unbalanced '[' in model spec {spec!r}")
+    parts.append(cur)
+    return parts
+
+
 def make_from_spec(spec: str, **extra):
-    """Build a model from ``"name"`` or ``"name:k=v:k=v"`` (colours as ``r,g,b``)."""
-    name, *assign = spec.split(":")
+    """Build a model from ``"name"`` or ``"name:k=v:k=v"`` (colours as ``r,g,b``;
+    a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``)."""
+    name, *assign = split_spec(spec)
     params = parse_assignments(assign)
     params.update(extra)
     return make(name.strip(), **params)

@@ -66,7 +66,9 @@ def to_dict(plugin: str, params: dict) -> dict:
     d = {"type": plugin}
     for k, v in params.items():
         kind = plausible.info(pm.plugin_names()[plugin]).param(k).kind
-        if kind not in ("scalar", "color", "choice"):
+        if kind == "model":
+            d[k] = v  # a nested model spec string (pumped_up's base)
+        elif kind not in ("scalar", "color", "choice"):
             d[k] = pm.format_structured(v)
         elif isinstance(v, (list, tuple, np.ndarray)):
             d[k] = {"type": "rgb", "value": [float(x) for x in v]}

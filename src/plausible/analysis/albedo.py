@@ -169,3 +169,49 @@ def hemispherical_albedo(model, *, n_theta: int = 16, n_phi: int | None = None) 
     if np.ndim(tot) == 0:
         return AlbedoResult(float(tot), float(err))
     return AlbedoResult(tot, err)
+
+
+def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_theta: int = 361,
+                 tol: float = 1e-4, progress=None):
+    """The directional albedo of ``model`` tabulated over the hemisphere, as an
+    :class:`~plausible.tables.AngleTable` (Catmull-Rom interpolation).
+
+    1-D in the polar angle for an isotropic model (:func:`is_isotropic`), 2-D with
+    ``n_phi`` azimuths (default 32) otherwise.  For a colour model the table holds
+    the largest channel.  The polar grid starts with ``n_theta`` nodes (2 degrees)
+    and is halved while the interpolation error, estimated at the new nodes from
+    the coarser table and divided by 8 (the ``O(h^3)`` rate), exceeds ``tol``, up to
+    ``max_theta`` nodes.  The node on the horizon is evaluated 1e-6 rad above it
+    (at exactly 90 degrees the albedo is zero by convention, not by continuity).
+    ``progress``, if given, is called with the number of albedo evaluations just done.
+    """
+    from ..tables import HALF_PI, AngleTable
+
+    if n_phi is None:
+        n_phi = 0 if is_isotropic(model) else 32
+    phis = np.arange(n_phi) * (2 * math.pi / n_phi) if n_phi else np.zeros(1)
+
+    def column(theta):
+        t = min(theta, HALF_PI - 1e-6)
+        row = [np.max(np.atleast_1d(albedo(model, direction(t, ph)).value)) for ph in phis]
+        if progress:
+            progress(len(phis))
+        return np.array(row) if n_phi else row[0]
+
+    thetas = np.linspace(0.0, HALF_PI, n_theta)
+    vals = np.array([column(t) for t in thetas])
+    while True:
+        coarse = AngleTable(vals)
+        n = 2 * len(vals) - 1
+        if n > max_theta:
+            return coarse
+        mids = 0.5 * (thetas[:-1] + thetas[1:])
+        new = np.array([column(t) for t in mids])
+        guess = coarse.lookup_angles(mids, phis if n_phi else None)
+        fine = np.empty((n,) + vals.shape[1:])
+        fine[0::2] = vals
+        fine[1::2] = new
+        thetas = np.linspace(0.0, HALF_PI, n)
+        vals = fine
+        if np.max(np.abs(guess - new)) / 8.0 <= tol:
+            return AngleTable(vals)

@@ -210,6 +210,11 @@ def make_plugin_class(plugin: str, model_name: str):
                     self._const[prm.name] = prm.default
                     continue
                 raw = props[key]
+                if prm.kind == "model":
+                    # a nested model spec (pumped_up's base): the model validates it
+                    consts[prm.name] = raw
+                    self._const[prm.name] = raw
+                    continue
                 if prm.kind not in ("scalar", "color", "choice"):
                     # structured parameter (e.g. Lafortune's lobes): a string of numbers
                     val = prm.validate(parse_structured(raw) if isinstance(raw, str) else raw, plugin)

@@ -1,0 +1,222 @@
+"""Albedo pumping-up (Neumann, Neumann, Szirmay-Kalos 1999, sec. 3).
+
+An operator on any reciprocal BRDF ``f`` (``neumann-neumann-szirmay-kalos-albedo-pumping-up.txt``):
+
+* eq. 16: ``f*(L, V) = f(L, V) / g(L, V)`` with ``g`` symmetric and
+  ``max(a(L), a(V)) <= g(L, V)`` (eq. 17), ``a`` the directional albedo of ``f``;
+* eq. 20: ``g1(L, V) = max(a(L), a(V))`` (``correction="max"``);
+* eq. 21: ``g2(L, V) = max(a(L), a(V), (N.V)(N.L))`` (``correction="controlled"``).
+
+Then ``a(L) <= a*(L) <= 1`` (eq. 18-19): ``a*(L) = int f / g cos <= int f / a(L) cos = 1``.
+The proof needs only ``g >= max(a(L), a(V))``; the upper bound ``g <= 1`` of
+eq. 17 is what makes the albedo grow, so a base whose albedo exceeds 1 (Ward,
+Cook-Torrance with ``G = 1`` at grazing) is made energy conserving by one
+application ("even if the original BRDF is only symmetric, but is not energy
+preserving, then the first pumping-up operation makes it energy preserving").
+
+Applied ``times`` times, each level divides by the ``g`` built from the albedo of
+the level below: ``f_k = f_{k-1} / g(a_{k-1})``.  Each level's albedo is
+integrated once with :func:`plausible.analysis.albedo_table` (the accurate
+quadrature; 1-D in ``theta`` for an isotropic base, 2-D with azimuth otherwise),
+interpolated with Catmull-Rom cubics (:class:`plausible.tables.AngleTable`), and
+cached in memory and on disk (see :func:`table_cache_dir`).
+
+Colour bases: ``g`` uses the largest channel of the albedo.  It still satisfies
+eq. 17's lower bound for every channel (so every channel stays energy
+conserving), and it keeps the base's hue.  For a grey base it is the paper's operator.
+
+Fresnel: the pumped lobe may be multiplied by a Fresnel factor ``F(L.H)``
+(:func:`plausible.fresnel.weight`; ``L.H = V.H`` keeps it reciprocal, ``F <= 1``
+keeps the albedo ``<= 1``), the way the paper renders its metals (fig. 8).
+The albedo tables are built without it, so spectral rendering needs one table.
+
+Sampling and ``pdf`` are the base model's (the paper renders with importance
+sampling of the base lobes); the weight ``f* cos / pdf`` carries the correction.
+This is the one model that depends on :mod:`plausible.analysis`: the operator is
+defined by an integral of its base.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import fresnel, vec
+from ..bxdf import BxDF, above
+from ..params import Param
+from ..registry import register
+
+#: Tables built in this process: key -> AngleTable.
+_TABLES: dict = {}
+
+
+def table_cache_dir() -> Path | None:
+    """Where albedo tables are cached on disk: ``$PLAUSIBLE_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/plausible`` or ``~/.cache/plausible``; ``PLAUSIBLE_CACHE_DIR=""``
+    turns the disk cache off."""
+    env = os.environ.get("PLAUSIBLE_CACHE_DIR")
+    if env is not None:
+        return Path(env) if env else None
+    root = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(root) / "plausible"
+
+
+@dataclass(frozen=True)
+class ModelParam(Param):
+    """A model given by registry spec (``"reciprocal-phong:n=20:ks=1"``) or as a
+    :class:`~plausible.bxdf.BxDF` instance (``kind="model"``)."""
+
+    kind: str = "model"
+
+    def range_text(self) -> str:
+        return "a registered model spec 'name:k=v:...' or a BxDF instance"
+
+    def validate(self, value, owner: str = "model"):
+        where = f"{owner}: parameter '{self.name}'"
+        if isinstance(value, BxDF):
+            model = value
+        elif isinstance(value, str):
+            from ..registry import make_from_spec
+
+            try:
+                model = make_from_spec(value)
+            except ValueError as e:
+                raise ValueError(f"{where}: {e}") from None
+        else:
+            raise ValueError(f"{where} must be {self.range_text()}, got {value!r}")
+        if model.info is not None and not model.info.reciprocal:
+            raise ValueError(f"{where}: the base model {model.name!r} is not reciprocal; pumping-up "
+                             f"needs a symmetric BRDF f(L, V) = f(V, L) (its energy proof, eq. 18, "
+                             f"uses the symmetry). Use a reciprocal model, e.g. 'reciprocal-phong'.")
+        return model
+
+
+def spec_of(model) -> str:
+    """A canonical text of a model and its parameters (the cache key)."""
+    return repr(model)
+
+
+def _source_hash(model) -> str:
+    """Hash of the source that determines a table: the base's module and the integrator."""
+    from ..analysis import albedo as albedo_mod
+    from .. import tables
+
+    h = hashlib.sha1()
+    for obj in (type(model), albedo_mod, tables):
+        try:
+            h.update(inspect.getsource(inspect.getmodule(obj)).encode())
+        except (OSError, TypeError):
+            h.update(repr(obj).encode())
+    return h.hexdigest()[:16]
+
+
+def albedo_table_of(model, progress=None):
+    """The (cached) albedo table of ``model``: memory first, then disk, else integrated."""
+    from ..analysis import albedo_table
+    from ..tables import AngleTable
+
+    key = spec_of(model) + "|" + _source_hash(model)
+    if key in _TABLES:
+        return _TABLES[key]
+    digest = hashlib.sha1(key.encode()).hexdigest()
+    cache = table_cache_dir()
+    path = cache / f"albedo-{digest}.npy" if cache else None
+    table = None
+    if path is not None and path.exists():
+        try:
+            table = AngleTable(np.load(path))
+        except (OSError, ValueError):
+            table = None
+    if table is None:
+        table = albedo_table(model, progress=progress)
+        if path is not None:
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_suffix(f".{os.getpid()}.tmp.npy")
+                np.save(tmp, table.values)
+                os.replace(tmp, path)
+            except OSError:
+                pass
+    _TABLES[key] = table
+    return table
+
+
+def correction(ops, kind, a_l, a_v, wi, wo):
+    """``g1 = max(a(L), a(V))`` (eq. 20) or ``g2 = max(a(L), a(V), (N.V)(N.L))`` (eq. 21)."""
+    g = ops.maximum(a_l, a_v)
+    if kind == "controlled":
+        g = ops.maximum(g, wi[2] * wo[2])
+    return g
+
+
+@register("pumped-up",
+          "Albedo pumping-up of a reciprocal base (Neumann et al. 1999, eq. 16, 20, 21): "
+          "f* = f / g, g = max(a(L), a(V)) [max] or max(a(L), a(V), N.L N.V) [controlled], "
+          "applied 'times' times.",
+          references=("Neumann, Neumann, Szirmay-Kalos, albedo pumping-up, 1999, sec. 3, eq. 16-21",))
+class PumpedUp(BxDF):
+    """``f* = F(L.H) f / (g_1 g_2 ... g_times)``, each ``g_k`` built from the albedo
+    of the model pumped ``k - 1`` times (see the module docstring)."""
+
+    PARAMS = (
+        ModelParam("base", "reciprocal-phong:ks=1:n=20",
+                   doc="the reciprocal base model, 'name:k=v:...'",
+                   extremes=("reciprocal-blinn:ks=1:n=20",)),
+        Param("correction", "max", kind="choice", choices=("max", "controlled"),
+              doc="g1 = max(a(L), a(V)) (eq. 20) or controlled g2 (eq. 21)",
+              extremes=("controlled",)),
+        Param("times", 1, 1, 8, integer=True, doc="how many times the operator is applied",
+              extremes=(3,)),
+        Param("fresnel", "none", kind="choice", choices=fresnel.FRESNEL_CHOICES,
+              doc="Fresnel factor at L.H multiplied on the pumped lobe"),
+        Param("rs", 1.0, 0.0, 1.0, "color", "constant factor (fresnel='none') or Schlick R0"),
+        Param("eta", 0.2, 0.0, 100.0, "color", "conductor index n (fresnel='conductor')"),
+        Param("k", 3.0, 0.0, 100.0, "color", "conductor extinction k (fresnel='conductor')"),
+    )
+
+    def __init__(self, progress=None, **params):
+        super().__init__(**params)
+        base = self.params["base"]
+        self.base = base
+        self.tables = []
+        level = base
+        for t in range(1, self.params["times"] + 1):
+            self.tables.append(albedo_table_of(level, progress=progress))
+            if t < self.params["times"]:
+                level = PumpedUp(base=base, correction=self.params["correction"], times=t)
+        # colours of the base and of the Fresnel factor share the channel axis
+        chans = {c for c in (base.channels, self.channels) if c}
+        if len(chans) > 1:
+            raise ValueError(f"PumpedUp: the base has {base.channels} colour channels and "
+                             f"rs/eta/k have {self.channels}; give them the same count")
+        self.channels = chans.pop() if chans else None
+
+    def g(self, ops, wi, wo):
+        """The product of the corrections of every level."""
+        total = 1.0
+        for tab in self.tables:
+            total = total * correction(ops, self.params["correction"], tab.lookup(ops, wi),
+                                       tab.lookup(ops, wo), wi, wo)
+        return total
+
+    def _f(self, ops, wi, wo, p):
+        f = self.base._f(ops, wi, wo, self.base.p)
+        g = self.g(ops, wi, wo)
+        ok = above(ops, wi, wo) & (g > 0.0)
+        h = vec.half_vector(ops, wi, wo)
+        F = fresnel.weight(ops, p.fresnel, vec.dot(wi, h), p.rs, p.eta, p.k)
+        return ops.where(ok, F * f / ops.where(ok, g, 1.0), 0.0)
+
+    def _pdf(self, ops, wi, wo, q):
+        return self.base._pdf(ops, wi, wo, self.base.q)
+
+    def _sample(self, ops, wi, u, q):
+        return self.base._sample(ops, wi, u, self.base.q)
+
+    def peak_directions(self, wi):
+        return self.base.peak_directions(wi)
