@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mi_helpers import mi, to_dict
+from mi_helpers import PLUGIN_MODELS, mi, moderate, to_dict
 
 import plausible
 
@@ -75,6 +75,74 @@ def test_white_furnace(plugin, params):
     assert np.isclose(a[0, 0].mean(), 1.0, atol=1e-6)
 
 
+def _reciprocal_plausible_plugins():
+    out = []
+    for plugin, name in sorted(PLUGIN_MODELS.items()):
+        info = plausible.info(name)
+        if info.reciprocal and info.energy_conserving and plugin != "modified_phong":
+            out.append((plugin, name))  # modified_phong is phong under its Mitsuba 0.5 name
+    return out
+
+
+def furnace_residuals(plugin_dict, model, res=32, width=1.1, spp=64):
+    """Render the whole sphere twice; per ring of pixels (8 rings of radius up to
+    0.97), the z-score of the mean of (pixel - expected), where expected is the
+    model's directional albedo at the pixel's view angle (asin of the distance to
+    the centre; orthographic camera) averaged over 4x4 points of the pixel, and
+    the noise is estimated from the difference of the two renders."""
+    from plausible.analysis import albedo_curve
+
+    scene = furnace_scene(plugin_dict, width, res)
+    a = np.array(mi.render(scene, seed=2, spp=spp), dtype=np.float64).mean(axis=-1)
+    b = np.array(mi.render(scene, seed=3, spp=spp), dtype=np.float64).mean(axis=-1)
+    thetas = np.linspace(0.0, np.arcsin(0.985), 40)
+    curve = np.asarray(albedo_curve(model, thetas).value)
+    curve = curve if curve.ndim == 1 else curve.mean(axis=-1)
+    sub = (np.arange(4) + 0.5) / 4
+    edges = np.arange(res + 1) * (2 * width / res) - width
+    px = edges[:-1, None] + (edges[1] - edges[0]) * sub[None, :]  # (res, 4)
+    X = px[None, :, None, :]
+    Y = px[:, None, :, None]
+    r = np.sqrt(X ** 2 + Y ** 2)  # (res, res, 4, 4)
+    inside = np.all(r < 0.97, axis=(2, 3))
+    expect = np.interp(np.arcsin(np.minimum(r, 0.97)), thetas, curve).mean(axis=(2, 3))
+    rc = np.sqrt(((edges[:-1] + edges[1:]) / 2)[None, :] ** 2 + ((edges[:-1] + edges[1:]) / 2)[:, None] ** 2)
+    sigma = np.std((a - b)[inside]) / np.sqrt(2.0) / np.sqrt(2.0)  # of the mean of two renders
+    resid = (a + b) / 2 - expect
+    z = []
+    for lo in np.arange(8) * 0.97 / 8:
+        ring = inside & (rc >= lo) & (rc < lo + 0.97 / 8)
+        if ring.sum() >= 4:
+            z.append(resid[ring].mean() / (sigma / np.sqrt(ring.sum())))
+    return np.array(z), (a + b) / 2, sigma
+
+
+@pytest.mark.parametrize("plugin,name", _reciprocal_plausible_plugins(),
+                         ids=[p for p, _ in _reciprocal_plausible_plugins()])
+def test_furnace_pixels_equal_the_albedo_at_their_view_angle(plugin, name):
+    """Every reciprocal, energy-conserving model (the test parameters of the plugin
+    tests): the furnace image equals the directional albedo at each pixel's view
+    angle within noise (|z| < 4.5 in each of 8 rings, Sidak for ~100 rings in all),
+    and no pixel exceeds 1 by more than 5 sigma. Anisotropic models: their albedo
+    depends on the azimuth too, so only the bound is checked (the pole test covers them)."""
+    from plausible.analysis import is_isotropic
+
+    params = moderate(name)
+    model = plausible.make(name, **params)
+    z, img, sigma = furnace_residuals(to_dict(plugin, params), model)
+    assert np.max(img) <= 1.0 + 5.0 * sigma + 1e-6
+    if is_isotropic(model):
+        assert np.all(np.abs(z) < 4.5), z
+
+
+def test_furnace_ring_checker_detects_a_wrong_albedo():
+    """The ring comparison fails for a plugin rendered with rd = 0.7 against a model
+    with rd = 0.68 (3% off)."""
+    model = plausible.make("lambertian", rd=0.68)
+    z, _, _ = furnace_residuals({"type": "lambertian", "rd": 0.7}, model)
+    assert np.max(np.abs(z)) > 4.5
+
+
 def test_furnace_checker_detects_a_wrong_albedo():
     """The comparison above fails for a plugin whose albedo differs (rd 0.7 vs 0.65)."""
     model = plausible.make("lambertian", rd=0.65)
@@ -120,3 +188,44 @@ def test_xml_scene_with_aliases_renders_like_native_names():
     np.testing.assert_array_equal(img_xml, img_native)
     assert np.all(np.isfinite(img_xml))
     assert img_xml[4, 4].mean() < 0.95 and np.isclose(img_xml[0, 0].mean(), 1.0)
+
+
+# -- brushed metal: the tangent decides the direction of the streak ------------------
+
+def _cylinder_highlight(nu, nv, res=64):
+    """Render Mitsuba's cylinder (axis z, radius 1) with ``ashikhmin_shirley``
+    (rs = 0.9, rd = 0, the paper's brushed metal) under a point light at the camera,
+    and return the spread (standard deviation, pixels) of the highlight (pixels above
+    half the maximum) along the axis (image rows) and around it (image columns)."""
+    sc = mi.load_dict({
+        "type": "scene", "integrator": {"type": "direct"},
+        "sensor": {"type": "perspective", "fov": 30,
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[6, 0, 0], target=[0, 0, 0], up=[0, 0, 1]),
+                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"},
+                            "pixel_format": "rgb"},
+                   "sampler": {"type": "independent", "sample_count": 16}},
+        "cyl": {"type": "cylinder", "radius": 1.0, "p0": [0, 0, -2], "p1": [0, 0, 2],
+                "bsdf": {"type": "ashikhmin_shirley", "nu": nu, "nv": nv, "rs": 0.9, "rd": 0.0}},
+        "light": {"type": "point", "position": [6, 0, 0], "intensity": {"type": "rgb", "value": 30.0}},
+    })
+    img = np.array(mi.render(sc, seed=0), dtype=np.float64).mean(axis=-1)
+    rows, cols = np.nonzero(img > 0.5 * img.max())
+    return rows.std(), cols.std()
+
+
+def test_brushed_cylinder_streak_follows_the_tangent():
+    """On the cylinder, nu acts around the circumference (sh_frame.s) and nv along
+    the axis: the highlight's elongation (spread along / around the axis) grows more
+    than 2x from nu = 10, nv = 100 (lobe wide around: the streak spreads around the
+    cylinder) to isotropic nu = nv = 30, and again from isotropic to nu = 100,
+    nv = 10 (lobe wide along the axis: a long streak along it). Measured: 2.0, 6.1, 16.5.
+    An isotropic model is the control: the elongation changes only with the tangent."""
+    elong = {}
+    around = {}
+    for nu, nv in ((10.0, 100.0), (30.0, 30.0), (100.0, 10.0)):
+        a, b = _cylinder_highlight(nu, nv)
+        elong[(nu, nv)] = a / b
+        around[(nu, nv)] = b
+    assert elong[(30.0, 30.0)] > 2 * elong[(10.0, 100.0)]
+    assert elong[(100.0, 10.0)] > 2 * elong[(30.0, 30.0)]
+    assert around[(10.0, 100.0)] > around[(30.0, 30.0)] > around[(100.0, 10.0)]
