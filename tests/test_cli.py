@@ -76,3 +76,17 @@ def test_albedo_table_and_plot(tmp_path):
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10_000
     rows = [ln for ln in r.output.splitlines() if ln.strip().startswith("│ 0.00")]
     assert rows and "0.500000" in rows[0] and "1.000000" in rows[0]
+
+
+def test_albedo_of_a_pumped_up_model_with_a_nested_spec():
+    """`plausible albedo` takes a pumped-up model with its base in brackets: at
+    normal incidence the unit-albedo Phong and its pumped version both give 1; a
+    non-reciprocal base is refused with the model's message."""
+    r = CliRunner().invoke(main, ["albedo", "reciprocal-phong:ks=1:n=20",
+                                  "pumped-up:base=[reciprocal-phong:ks=1:n=20]", "-n", "3"],
+                           terminal_width=200)
+    assert r.exit_code == 0, r.output
+    rows = [ln for ln in r.output.splitlines() if ln.strip().startswith("│ 0.00")]
+    assert rows and rows[0].count("1.000000") == 2
+    r = CliRunner().invoke(main, ["albedo", "pumped-up:base=[phong:n=20]", "-n", "3"])
+    assert r.exit_code != 0 and "not reciprocal" in r.output
