@@ -13,9 +13,10 @@ albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
 from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_albedo, reciprocity,
                        sampling_consistency)
 from .bxdf import BxDF, Sample
+from .fitting import fit
 from .registry import info, make, names, register
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "albedo", "albedo_curve", "check", "chi2", "energy", "hemispherical_albedo",
+__all__ = ["BxDF", "Sample", "albedo", "albedo_curve", "check", "chi2", "energy", "fit", "hemispherical_albedo",
            "info", "make", "names", "reciprocity", "register", "sampling_consistency", "__version__"]
