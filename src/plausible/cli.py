@@ -192,5 +192,71 @@ def _fmt_alb(v, e):
     return " ".join(f"{a:.6f}" for a in v) + f" (+-{float(np.max(e)):.1e})"
 
 
+# -- fit (plausible.fitting) ------------------------------------------------------------
+@main.command("fit")
+@click.argument("model")
+@click.option("--target", required=True, metavar="FILE_OR_MODEL",
+              help="A model spec (name:k=v), a MERL .binary file or a CSV table (wi xyz, wo xyz, f).")
+@PARAM_OPT
+@click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
+              show_default=True, help="Error metric minimised (see docs/fitting.md).")
+@click.option("--out", type=click.Path(file_okay=False), help="Write plane.png, albedo.png, fit.json here.")
+@click.option("--starts", type=click.IntRange(1), default=4, show_default=True, help="Optimiser starts.")
+@click.option("--time-limit", type=click.FloatRange(0), help="Stop after this many seconds (best so far).")
+@click.option("--seed", default=0, show_default=True, help="Seed of the random starts.")
+def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
+    """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
+    from .fitting import fit as run_fit
+    from .fitting.plots import write_plots
+
+    try:
+        res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
+                      seed=seed, time_limit=time_limit, progress=_Bar(f"fit {model}"))
+    except ValueError as e:
+        _fail(str(e))
+    console.print(f"[bold]{res.model.name}[/bold] fitted to {res.target.label} ({metric}, "
+                  f"{res.evaluations} evaluations, {res.seconds:.1f} s)")
+    t = Table()
+    t.add_column("parameter"); t.add_column("value")
+    for k, v in res.params.items():
+        t.add_row(k, _fmt(v.tolist() if isinstance(v, np.ndarray) else v))
+    console.print(t)
+    e = Table()
+    e.add_column("error (every metric)"); e.add_column("value")
+    for k, v in res.errors.items():
+        e.add_row(k, "n/a (no target albedo)" if v is None else f"{v:.6g}")
+    console.print(e)
+    if res.timed_out:
+        console.print("[yellow]time limit reached: best point found so far[/yellow]")
+    if out:
+        for p in write_plots(res, out):
+            console.print(f"wrote {p}")
+
+
+@main.command()
+@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
+              help="Directory for the images, data and index.html.")
+@click.option("--only", "only", multiple=True, metavar="NAME", help="Make only this figure (repeatable).")
+@click.option("--spp", type=click.IntRange(1, 1 << 16), help="Samples per pixel of the renders (default 64).")
+@click.option("--resolution", type=click.IntRange(8, 8192), help="Base image size in pixels (default 256).")
+@click.option("--quick", is_flag=True, help="Small images and sample counts (the CI mode).")
+@click.option("--force", is_flag=True, help="Remake figures even when their inputs have not changed.")
+@click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")
+def figures(out, only, spp, resolution, quick, force, list_only):
+    """Reproduce the papers' figures as a browsable report (OUT/index.html)."""
+    from . import figures as F
+
+    if list_only:
+        for n in F.names():
+            click.echo(f"{n:28s} {F.get(n).title}")
+        return
+    try:
+        res = F.run(out, only=list(only) or None, spp=spp, resolution=resolution, quick=quick, force=force,
+                    console=console)
+    except ValueError as e:
+        _fail(str(e))
+    sys.exit(0 if all(m["status"] == "ok" for m in res.values()) else 1)
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
