@@ -8,9 +8,9 @@ STAMP    := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12
 OUT      ?= out
 JOBS     ?= 2
 
-.PHONY: demo test test-all bench setup llvm clean
+.PHONY: demo test test-all bench setup llvm chromium clean
 
-setup: $(STAMP) llvm
+setup: $(STAMP) llvm chromium
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -26,9 +26,16 @@ llvm:
 	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19 >/dev/null; fi; \
 	fi
 
-# The main job: verify every model and plot the albedo curves of the papers' figures.
+# A real browser for the report's test (tests/figures: every image of index.html loads).
+chromium:
+	@if ! command -v chromium >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
+	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; fi; \
+	fi
+
+# The main job: every figure of the papers, measured, as a browsable report -> $(OUT)/index.html.
 demo: setup
-	$(BIN)/python -m plausible.demo --out $(OUT)
+	$(BIN)/plausible figures --out $(OUT)
 
 # The default test run (under 10 minutes on 2 cores).
 test: setup

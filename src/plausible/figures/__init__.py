@@ -1,0 +1,183 @@
+"""The papers' figures, reproduced: a registry of small figure functions.
+
+Each figure is a function ``fn(ctx, **params)`` registered with :func:`figure`:
+parameters in, images / plotted data / measured numbers out through the
+:class:`Context` (``ctx.image``, ``ctx.plot``, ``ctx.table``, ``ctx.measure``).
+:func:`plausible.figures.report.run` calls them with a progress bar, caches
+them by a hash of their inputs and writes ``index.html``.
+
+    >>> import plausible.figures as F
+    >>> F.run("out", only=["as-furnace"], quick=True)   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One registered figure: ``name`` (file-safe), ``title``, ``source`` (paper and
+    figure number), ``caption`` (quoted from the paper), ``params`` (keyword
+    arguments of ``fn``, shown in the report) and the function."""
+
+    name: str
+    title: str
+    source: str
+    caption: str
+    fn: Callable
+    params: dict = field(default_factory=dict)
+    renders: bool = False
+    module: str = ""
+
+
+FIGURES: dict[str, Figure] = {}
+
+
+def figure(name: str, title: str, source: str, caption: str, renders: bool = False, **params):
+    """Decorator: register ``fn(ctx, **params)`` as figure ``name``."""
+
+    def deco(fn):
+        if name in FIGURES and FIGURES[name].fn.__qualname__ != fn.__qualname__:
+            raise ValueError(f"figure {name!r} registered twice")
+        FIGURES[name] = Figure(name, title, source, caption, fn, dict(params), renders, fn.__module__)
+        return fn
+
+    return deco
+
+
+def _load():
+    from . import paper_as, paper_neumann, paper_notes, checks, lobes  # noqa: F401,I001  (report order)
+
+
+def names() -> list[str]:
+    _load()
+    return list(FIGURES)
+
+
+def get(name: str) -> Figure:
+    _load()
+    try:
+        return FIGURES[name]
+    except KeyError:
+        raise ValueError(f"unknown figure {name!r}; figures: {', '.join(FIGURES)}") from None
+
+
+#: Image size and samples per pixel of the default run, and of the quick (CI) run.
+DEFAULT_RESOLUTION, DEFAULT_SPP = 320, 128
+QUICK_RESOLUTION, QUICK_SPP = 48, 8
+
+
+class Context:
+    """What a figure function writes through.  ``res(scale)`` and ``spp(scale)``
+    give the image size / sample count for this run (``--resolution``, ``--spp``,
+    quick mode); the figure scales them for its own layout."""
+
+    def __init__(self, out: Path, *, resolution=None, spp=None, quick=False, progress=None):
+        self.out = Path(out)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.quick = quick
+        self.base_res = resolution or (QUICK_RESOLUTION if quick else DEFAULT_RESOLUTION)
+        self.base_spp = spp or (QUICK_SPP if quick else DEFAULT_SPP)
+        self._progress = progress
+        self.items: list[dict] = []      # images, plots, data files, in order
+        self.measurements: list[dict] = []
+        self.notes: list[str] = []
+
+    # -- sizes ------------------------------------------------------------------
+    def res(self, scale: float = 1.0, minimum: int = 8) -> int:
+        return max(minimum, int(round(self.base_res * scale / 2)) * 2)
+
+    def spp(self, scale: float = 1.0) -> int:
+        return max(1, int(round(self.base_spp * scale)))
+
+    # -- progress ---------------------------------------------------------------
+    def steps(self, total: int):
+        """Declare how many ``tick()`` calls this figure will make."""
+        if self._progress:
+            self._progress(total=total)
+
+    def tick(self, n: int = 1):
+        if self._progress:
+            self._progress(advance=n)
+
+    # -- outputs ----------------------------------------------------------------
+    def image(self, name: str, img, exposure: float = 1.0, caption: str = "") -> np.ndarray:
+        """A render: ``name.exr`` (linear) and ``name.png`` (sRGB)."""
+        from .scenes import write_image
+
+        img = np.asarray(img, dtype=np.float64)
+        write_image(self.out / name, img, exposure)
+        self.items.append(dict(kind="image", png=f"{name}.png", exr=f"{name}.exr", caption=caption))
+        return img
+
+    def plot(self, name: str, fig, caption: str = ""):
+        """A matplotlib figure -> ``name.png``."""
+        fig.savefig(self.out / f"{name}.png", dpi=110)
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+        self.items.append(dict(kind="plot", png=f"{name}.png", caption=caption))
+
+    def table(self, name: str, columns: dict, caption: str = ""):
+        """Plotted data as ``name.csv``: ``columns`` maps header -> 1-D array."""
+        keys = list(columns)
+        arr = np.column_stack([np.asarray(columns[k], dtype=np.float64).ravel() for k in keys])
+        np.savetxt(self.out / f"{name}.csv", arr, delimiter=",", header=",".join(keys), comments="",
+                   fmt="%.8g")
+        self.items.append(dict(kind="data", file=f"{name}.csv", caption=caption))
+
+    def json(self, name: str, obj, caption: str = ""):
+        (self.out / f"{name}.json").write_text(json.dumps(obj, indent=1, default=_jsonable))
+        self.items.append(dict(kind="data", file=f"{name}.json", caption=caption))
+
+    def file(self, name: str, caption: str = ""):
+        """Register a file the figure wrote itself into ``ctx.out``."""
+        self.items.append(dict(kind="data", file=name, caption=caption))
+
+    def measure(self, quantity: str, measured, expected=None, tol=None, note: str = "", at_most=None):
+        """A number measured on the figure; with ``expected`` and ``tol`` it is a
+        check (``ok = |measured - expected| <= tol``); with ``at_most`` a bound
+        (``ok = measured <= at_most``)."""
+        m = dict(quantity=quantity, measured=_num(measured), expected=_num(expected), tol=_num(tol), note=note)
+        if expected is not None and tol is not None:
+            m["ok"] = bool(abs(float(measured) - float(expected)) <= float(tol))
+        if at_most is not None:
+            m["expected"] = f"<= {float(at_most):.6g}"
+            m["ok"] = bool(float(measured) <= float(at_most))
+        self.measurements.append(m)
+        return m
+
+    def note(self, text: str):
+        self.notes.append(text)
+
+
+def _num(x):
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else str(x)
+
+
+def _jsonable(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    return str(o)
+
+
+def run(out, **kw):
+    """Make the figures into ``out`` (see :func:`plausible.figures.report.run`)."""
+    from .report import run as _run
+
+    return _run(out, **kw)
+
+
+__all__ = ["Context", "FIGURES", "Figure", "figure", "get", "names", "run"]

@@ -1,0 +1,226 @@
+"""Mitsuba 3 scene builders and image output for the figures.
+
+Every scene is a ``mi.load_dict`` description built from plausible's plugins
+(:mod:`plausible.mitsuba`); nothing here holds a BRDF formula.  Images are
+written twice: linear HDR (OpenEXR, the rendered radiance) and tone-mapped
+8-bit sRGB PNG for viewing.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+RGB = "llvm_ad_rgb"
+SPECTRAL = "llvm_ad_spectral"
+
+#: Gold's colour at normal incidence (linear sRGB of the conductor reflectance
+#: of Au from plausible.spectra), used for the "golden" spheres of A-S fig. 3.
+GOLD_FALLBACK = (1.0, 0.71, 0.29)
+
+
+def mitsuba(variant: str = RGB):
+    """Set the Mitsuba variant, register plausible's plugins, return ``mi``."""
+    import mitsuba as mi
+
+    import plausible.mitsuba as pm
+
+    pm.register(variant)
+    return mi
+
+
+def gold_rgb() -> tuple:
+    """Linear-sRGB normal-incidence reflectance of gold (conductor Fresnel with
+    Au's tabulated n, k, reduced to RGB by :mod:`plausible.spectra`)."""
+    try:
+        from plausible import spectra
+
+        return tuple(float(min(max(x, 0.0), 1.0)) for x in spectra.metal_rgb("Au"))
+    except Exception:   # older tables: a fixed gold colour
+        return GOLD_FALLBACK
+
+
+# -- sensors -----------------------------------------------------------------------
+
+def orthographic(mi, width: float, res: int, spp: int, origin=(0, 0, 5), target=(0, 0, 0), up=(0, 1, 0),
+                 height: int | None = None):
+    """Orthographic camera covering ``[-width, width]`` horizontally (box filter,
+    so a pixel is the mean radiance over its footprint)."""
+    return {
+        "type": "orthographic",
+        "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target), up=list(up))
+        @ mi.ScalarTransform4f().scale([width, width * (height or res) / res, 1.0]),
+        "film": {"type": "hdrfilm", "width": res, "height": height or res, "rfilter": {"type": "box"},
+                 "pixel_format": "rgb"},
+        "sampler": {"type": "independent", "sample_count": spp},
+    }
+
+
+def perspective(mi, origin, target, res: int, spp: int, fov: float = 35.0, up=(0, 0, 1), height=None):
+    return {
+        "type": "perspective", "fov": fov,
+        "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target), up=list(up)),
+        "film": {"type": "hdrfilm", "width": res, "height": height or res, "rfilter": {"type": "gaussian"},
+                 "pixel_format": "rgb"},
+        "sampler": {"type": "independent", "sample_count": spp},
+    }
+
+
+# -- scenes ---------------------------------------------------------------------
+
+def furnace(mi, bsdf: dict, res: int, spp: int, width: float = 1.05):
+    """Unit sphere in a constant unit-radiance environment ("furnace", A-S fig. 2),
+    seen by an orthographic camera down ``-z``: the pixel at image radius ``r``
+    (in sphere radii) sees the surface at incidence ``asin(r)``; ``path`` with
+    ``max_depth = 2`` (one bounce: the pixel is the directional albedo)."""
+    return mi.load_dict({
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 2},
+        "sensor": orthographic(mi, width, res, spp),
+        "sphere": {"type": "sphere", "radius": 1.0, "bsdf": bsdf},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+    })
+
+
+def checker_plane(scale: float = 20.0, size: float = 12.0, colors=((0.75, 0.75, 0.75), (0.15, 0.15, 0.2)),
+                  z: float = -1.0):
+    """A texture-mapped Lambertian plane (checkerboard) at height ``z``."""
+    import mitsuba as mi
+
+    return {
+        "type": "rectangle",
+        "to_world": mi.ScalarTransform4f().translate([0, 0, z]) @ mi.ScalarTransform4f().scale(size),
+        "bsdf": {"type": "diffuse", "reflectance": {
+            "type": "checkerboard", "color0": {"type": "rgb", "value": list(colors[0])},
+            "color1": {"type": "rgb", "value": list(colors[1])},
+            "to_uv": mi.ScalarTransform4f().scale([scale, scale, 1])}},
+    }
+
+
+def studio_lights(sky: float = 0.35, sun=((4.0, -3.0, 7.0), 90.0), area=True):
+    """Sky (constant environment) + a point "sun" + optionally a rectangular area light."""
+    import mitsuba as mi
+
+    d = {"sky": {"type": "constant", "radiance": {"type": "rgb", "value": sky}},
+         "sun": {"type": "point", "position": list(sun[0]), "intensity": {"type": "rgb", "value": sun[1]}}}
+    if area:
+        d["softbox"] = {"type": "rectangle",
+                        "to_world": mi.ScalarTransform4f().look_at(origin=[-6, -2, 9], target=[0, 0, 0], up=[0, 0, 1])
+                        @ mi.ScalarTransform4f().scale(3.0),
+                        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 1.5}}}
+    return d
+
+
+def sphere_grid(mi, bsdfs: list, res: int, spp: int, cols: int = 4, spacing: float = 2.4, plane=True,
+                lights=None, camera_elev: float = 55.0):
+    """Spheres of radius 1 on a plane, ``cols`` per row (row-major ``bsdfs``),
+    seen from above at ``camera_elev`` degrees."""
+    rows = math.ceil(len(bsdfs) / cols)
+    d = {"type": "scene", "integrator": {"type": "path", "max_depth": 6}}
+    for i, b in enumerate(bsdfs):
+        r, c = divmod(i, cols)
+        x = (c - (cols - 1) / 2) * spacing
+        y = ((rows - 1) / 2 - r) * spacing
+        d[f"sphere{i}"] = {"type": "sphere", "center": [x, y, 0.0], "radius": 1.0, "bsdf": b}
+    if plane:
+        d["plane"] = checker_plane()
+    d.update(lights or studio_lights())
+    ext = max(cols, rows) * spacing
+    el = math.radians(camera_elev)
+    dist = 2.2 * ext
+    d["sensor"] = perspective(mi, origin=[0, -dist * math.cos(el), dist * math.sin(el)], target=[0, 0, 0],
+                              res=res, spp=spp, fov=32.0, up=[0, 0, 1])
+    return mi.load_dict(d)
+
+
+def render(mi, scene, seed: int = 0, spp: int | None = None) -> np.ndarray:
+    """Render ``scene`` -> float64 array (H, W, C); the seed fixes the result."""
+    img = mi.render(scene, seed=seed, spp=spp or 0)
+    return np.array(img, dtype=np.float64)
+
+
+# -- output -----------------------------------------------------------------------
+
+def tonemap(img: np.ndarray, exposure: float = 1.0) -> np.ndarray:
+    """Linear radiance -> 8-bit sRGB (clipped at 1 after ``exposure``)."""
+    x = np.clip(np.nan_to_num(np.asarray(img, dtype=np.float64) * exposure, nan=0.0), 0.0, 1.0)
+    s = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return np.round(s * 255).astype(np.uint8)
+
+
+def write_image(path_stem: Path, img: np.ndarray, exposure: float = 1.0) -> list:
+    """Write ``stem.exr`` (linear float32) and ``stem.png`` (sRGB); returns both paths."""
+    import mitsuba as mi
+    from matplotlib.image import imsave
+
+    path_stem = Path(path_stem)
+    img = np.asarray(img, dtype=np.float32)
+    if img.ndim == 2:
+        img = img[..., None].repeat(3, axis=-1)
+    exr = path_stem.with_suffix(".exr")
+    mi.Bitmap(np.ascontiguousarray(img[..., :3]), pixel_format=mi.Bitmap.PixelFormat.RGB).write(str(exr))
+    png = path_stem.with_suffix(".png")
+    imsave(png, tonemap(img[..., :3], exposure))
+    return [exr, png]
+
+
+def grid_figure(imgs, rows: int, cols: int, labels, row_labels=(), col_labels=(), exposure: float = 1.0,
+                title: str = ""):
+    """A matplotlib figure showing tone-mapped ``imgs`` (row-major) with a label under each."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(rows, cols, figsize=(2.3 * cols, 2.6 * rows), squeeze=False)
+    for i, ax in enumerate(axes.flat):
+        ax.set_xticks([])
+        ax.set_yticks([])
+        if i >= len(imgs):
+            ax.axis("off")
+            continue
+        ax.imshow(tonemap(imgs[i], exposure), interpolation="nearest")
+        ax.set_xlabel(labels[i], fontsize=7)
+    for r, t in enumerate(row_labels):
+        axes[r, 0].set_ylabel(t, fontsize=9)
+    for c, t in enumerate(col_labels):
+        axes[0, c].set_title(t, fontsize=9)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def mosaic(imgs, rows: int, cols: int) -> np.ndarray:
+    """Stitch equally sized images (row-major) into one array."""
+    h, w, c = imgs[0].shape
+    out = np.zeros((rows * h, cols * w, c))
+    for i, im in enumerate(imgs):
+        r, q = divmod(i, cols)
+        out[r * h:(r + 1) * h, q * w:(q + 1) * w] = im
+    return out
+
+
+def radius_map(res: int, width: float) -> np.ndarray:
+    """Distance from the image centre (in scene units) of each pixel centre of an
+    orthographic ``res`` x ``res`` image covering ``[-width, width]``."""
+    x = ((np.arange(res) + 0.5) / res * 2 - 1) * width
+    return np.hypot(x[None, :], x[:, None])
+
+
+def studio(mi, shapes: dict, sensor: dict, plane: bool = True, lights=None, max_depth: int = 6):
+    """``shapes`` on the checker plane under :func:`studio_lights`."""
+    d = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth}, "sensor": sensor}
+    d.update(shapes)
+    if plane:
+        d["plane"] = checker_plane()
+    d.update(lights or studio_lights())
+    return mi.load_dict(d)
+
+
+def rgb(v):
+    """A Mitsuba ``rgb`` texture dict from a float or a triple."""
+    v = [float(v)] * 3 if np.ndim(v) == 0 else [float(x) for x in v]
+    return {"type": "rgb", "value": v}
