@@ -237,8 +237,8 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the images, data and index.html.")
 @click.option("--only", "only", multiple=True, metavar="NAME", help="Make only this figure (repeatable).")
-@click.option("--spp", type=click.IntRange(1, 1 << 16), help="Samples per pixel of the renders (default 64).")
-@click.option("--resolution", type=click.IntRange(8, 8192), help="Base image size in pixels (default 256).")
+@click.option("--spp", type=click.IntRange(1, 1 << 16), help="Samples per pixel of the renders (default 128).")
+@click.option("--resolution", type=click.IntRange(8, 8192), help="Base image size in pixels (default 320).")
 @click.option("--quick", is_flag=True, help="Small images and sample counts (the CI mode).")
 @click.option("--force", is_flag=True, help="Remake figures even when their inputs have not changed.")
 @click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")

@@ -109,7 +109,7 @@ def fig1(ctx, phong, cook_torrance, cook_torrance_g1, ward):
         rising = a[0] < a[1] < a[2]
         ctx.measure(f"{s}: albedo at 0 deg", c[s][0])
         ctx.measure(f"{s}: albedo at 89 / 89.9 / 89.99 deg", a[2],
-                    note=f"{a[0]:.4f} / {a[1]:.4f} / {a[2]:.4f}: " + ("rising (diverges)" if rising else "not rising"))
+                    note=f"{a[0]:.4f} / {a[1]:.4f} / {a[2]:.4f}: " + ("rising" if rising else "not rising"))
         if s == phong:
             ctx.measure("Phong n = 150 decreases toward grazing: albedo(89.99)", a[2], at_most=0.5 * c[s][0])
         elif s in (cook_torrance_g1, ward):

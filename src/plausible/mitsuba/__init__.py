@@ -250,7 +250,7 @@ def make_plugin_class(plugin: str, model_name: str):
                     consts[prm.name] = min(max(mean, prm.lo), prm.hi)
                 else:
                     consts[prm.name] = (np.array(raw, dtype=np.float64).ravel()
-                                        if hasattr(raw, "__len__") else float(tex.mean()))
+                                        if hasattr(raw, "__len__") else float(np.mean(np.asarray(tex.mean()))))
                     if np.ndim(consts[prm.name]) == 1 and consts[prm.name].size == 1:
                         consts[prm.name] = float(consts[prm.name][0])
                 self._tex[prm.name] = tex
