@@ -16,10 +16,10 @@ from . import figure
 INCIDENCE = (0.0, 30.0, 60.0, 80.0)
 
 
-def lobe_values(model, theta_i_deg: float, view_deg):
-    """``f(wi, wo) cos(theta_o)`` with ``wi`` at ``theta_i`` (azimuth 0) and ``wo``
-    at signed angles ``view_deg`` in the plane of incidence (mirror at ``-theta_i``);
-    colour models are reduced to their channel mean."""
+def plane_f(model, theta_i_deg: float, view_deg):
+    """``f(wi, wo)`` with ``wi`` at ``theta_i`` (azimuth 0) and ``wo`` at signed
+    angles ``view_deg`` in the plane of incidence (mirror at ``-theta_i``), colour
+    models reduced to their channel mean; returns ``(f, view angles in radians)``."""
     ti = math.radians(theta_i_deg)
     wi = np.array([math.sin(ti), 0.0, math.cos(ti)])
     v = np.radians(np.asarray(view_deg, dtype=np.float64))
@@ -27,6 +27,12 @@ def lobe_values(model, theta_i_deg: float, view_deg):
     f = np.asarray(model.eval(wi, wo))
     if f.ndim > 1:
         f = f.mean(axis=-1)
+    return f, v
+
+
+def lobe_values(model, theta_i_deg: float, view_deg):
+    """``f(wi, wo) cos(theta_o)`` in the plane of incidence (:func:`plane_f`)."""
+    f, v = plane_f(model, theta_i_deg, view_deg)
     return f * np.cos(v)
 
 

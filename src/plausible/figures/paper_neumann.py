@@ -12,6 +12,7 @@ from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
 
 from . import figure
+from .lobes import plane_f
 
 SRC = "Neumann, Neumann & Szirmay-Kalos 1999"
 RADIANCE_ANGLES = (0.0, 40.0, 80.0)
@@ -22,14 +23,8 @@ def output_radiance(model, theta_l_deg: float, view_deg):
     direction ``L`` (sec. 3.1: irradiance ``cos theta_L``): ``f(L, V) cos theta_L``,
     with ``L`` and ``V`` in the plane of incidence (``V`` at signed angle
     ``view_deg``; the mirror direction of ``L`` is at ``-theta_L``)."""
-    tl = math.radians(theta_l_deg)
-    L = np.array([math.sin(tl), 0.0, math.cos(tl)])
-    v = np.radians(np.asarray(view_deg, dtype=np.float64))
-    V = np.stack([np.sin(v), np.zeros_like(v), np.cos(v)], axis=-1)
-    f = np.asarray(model.eval(L, V))
-    if f.ndim > 1:
-        f = f.mean(axis=-1)
-    return f * math.cos(tl)
+    f, _ = plane_f(model, theta_l_deg, view_deg)
+    return f * math.cos(math.radians(theta_l_deg))
 
 
 def _plt():
