@@ -112,7 +112,7 @@ class AngleTable:
         s = t - i
         wt = catmull_rom_weights(s)
         if self.isotropic:
-            return sum(wt[k] * ops.gather(tab, i + float(k)) for k in range(1, 4)) + wt[0] * ops.gather(tab, i)
+            return sum(wt[k] * ops.gather(tab, i + float(k)) for k in range(4))
         m = self.n_phi
         row = float(m + 3)
         phi = ops.atan2(w[1], w[0])

@@ -117,8 +117,10 @@ def furnace_residuals(plugin_dict, model, res=32, width=1.1, spp=64):
     return np.array(z), (a + b) / 2, sigma
 
 
-@pytest.mark.parametrize("plugin,name", _reciprocal_plausible_plugins(),
-                         ids=[p for p, _ in _reciprocal_plausible_plugins()])
+RECIPROCAL_PLAUSIBLE = _reciprocal_plausible_plugins()
+
+
+@pytest.mark.parametrize("plugin,name", RECIPROCAL_PLAUSIBLE, ids=[p for p, _ in RECIPROCAL_PLAUSIBLE])
 def test_furnace_pixels_equal_the_albedo_at_their_view_angle(plugin, name):
     """Every reciprocal, energy-conserving model (the test parameters of the plugin
     tests): the furnace image equals the directional albedo at each pixel's view

@@ -2,12 +2,32 @@
 
 from __future__ import annotations
 
-
 from plausible import registry
 
 from . import figure
 
 QUICK_MODELS = ("lambertian", "modified-phong", "ashikhmin-shirley")
+
+
+def check_table(models, progress=None):
+    """:func:`plausible.check` (quick mode) of each model; returns ``(reports, markdown)``.
+
+    ``progress`` is called with no argument after each model.
+    """
+    from plausible.analysis import check
+
+    reports = []
+    for m in models:
+        reports.append(check(m, quick=True))
+        if progress:
+            progress()
+    lines = ["| model | parameters | claims plausible | reciprocity | energy (max albedo) | sampling | chi2 (p) |",
+             "|---|---|---|---|---|---|---|"]
+    for m, r in zip(models, reports):
+        claims = m.info.reciprocal and m.info.energy_conserving
+        cells = [f"{'PASS' if x.passed else 'FAIL'} {x.figure:.4g}" for x in r.results]
+        lines.append(f"| {m.name} | {r.params} | {'yes' if claims else 'no'} | " + " | ".join(cells) + " |")
+    return reports, "\n".join(lines) + "\n"
 
 
 @figure("checks", "Plausibility of every model: reciprocity, energy, sampling, chi-square",
@@ -18,7 +38,6 @@ QUICK_MODELS = ("lambertian", "modified-phong", "ashikhmin-shirley")
                  + ", ".join(QUICK_MODELS) + ")")
 def checks(ctx, variants):
     from plausible.analysis.suite import model_variants
-    from plausible.demo import check_table
 
     if ctx.quick:
         models = [registry.make(n) for n in QUICK_MODELS]

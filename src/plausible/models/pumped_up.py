@@ -42,6 +42,7 @@ import hashlib
 import inspect
 import os
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -101,13 +102,15 @@ def spec_of(model) -> str:
     return repr(model)
 
 
-def _source_hash(model) -> str:
-    """Hash of the source that determines a table: the base's module and the integrator."""
-    from ..analysis import albedo as albedo_mod
+@lru_cache(maxsize=None)
+def _source_hash(cls) -> str:
+    """Hash of the source that determines a table: the module of the model class
+    ``cls``, the integrator and the table code (read once per class)."""
     from .. import tables
+    from ..analysis import albedo_table  # its module is the integrator's
 
     h = hashlib.sha1()
-    for obj in (type(model), albedo_mod, tables):
+    for obj in (cls, albedo_table, tables):
         try:
             h.update(inspect.getsource(inspect.getmodule(obj)).encode())
         except (OSError, TypeError):
@@ -120,7 +123,7 @@ def albedo_table_of(model, progress=None):
     from ..analysis import albedo_table
     from ..tables import AngleTable
 
-    key = spec_of(model) + "|" + _source_hash(model)
+    key = spec_of(model) + "|" + _source_hash(type(model))
     if key in _TABLES:
         return _TABLES[key]
     digest = hashlib.sha1(key.encode()).hexdigest()
