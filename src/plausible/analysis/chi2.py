@@ -31,6 +31,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import scipy.stats
 
+from ..text import jsonable
 from .quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
 
 
@@ -48,9 +49,7 @@ class Chi2Result:
     worst_cells: list = field(default_factory=list)
 
     def to_dict(self):
-        from .checks import _jsonable
-
-        return _jsonable(asdict(self))
+        return jsonable(asdict(self))
 
 
 def sidak(alpha: float, n_tests: int) -> float:
