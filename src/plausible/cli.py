@@ -133,7 +133,7 @@ def models():
 
 
 def _fmt(v):   # the syntax of -p: colours as r,g,b
-    return fmt(v, sep=",", brackets=False)
+    return fmt(v, sep=",", brackets=False, sequences=(np.ndarray, list, tuple))
 
 
 @main.command("eval")

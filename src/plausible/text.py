@@ -16,20 +16,22 @@ import math
 import numpy as np
 
 
-def fmt(v, spec: str = "g", *, sep: str = ", ", brackets: bool = True, other=str) -> str:
-    """``v`` as text: floats with the format ``spec``; arrays, lists and tuples
-    element-wise, joined by ``sep`` (inside ``[...]`` if ``brackets``); anything
-    else with ``other`` (``str`` or ``repr``).
+def fmt(v, spec: str = "g", *, sep: str = ", ", brackets: bool = True, other=str,
+        sequences: tuple = (np.ndarray,)) -> str:
+    """``v`` as text: floats with the format ``spec``; an instance of ``sequences``
+    (default: NumPy arrays) element by element, joined by ``sep`` (inside
+    ``[...]`` if ``brackets``); anything else with ``other`` (``str`` or ``repr``).
 
     >>> fmt(np.array([0.5, 1.0]))
     '[0.5, 1]'
-    >>> fmt([0.5, 1.0], sep=",", brackets=False)
+    >>> fmt((0.5, 1.0), sep=",", brackets=False, sequences=(tuple,))
     '0.5,1'
     >>> fmt("max", other=repr)
     "'max'"
     """
-    if isinstance(v, (np.ndarray, list, tuple)):
-        body = sep.join(f"{x:{spec}}" if isinstance(x, float) else str(x) for x in np.asarray(v).ravel().tolist())
+    if isinstance(v, sequences):
+        items = v.ravel().tolist() if isinstance(v, np.ndarray) else list(v)
+        body = sep.join(f"{x:{spec}}" if isinstance(x, float) else str(x) for x in items)
         return f"[{body}]" if brackets else body
     return f"{v:{spec}}" if isinstance(v, float) else other(v)
 
