@@ -87,7 +87,7 @@ def chi2_sampler_pvalue(model, wi, n=100_000, nmu=10, nphi=20, seed=7, sub=12):
     return float(stats.chi2.sf(chi2, keep.sum() - 1))
 
 
-def _nodes(a, b, n):
+def end_clustered_nodes(a, b, n):
     """Gauss-Legendre on [a, b] through t = (1 - cos(pi s)) / 2 (nodes clustered at both ends)."""
     x, w = np.polynomial.legendre.leggauss(n)
     s = 0.5 * (x + 1.0)
@@ -111,9 +111,9 @@ def halfvector_albedo(model, theta_i, width, n=200, tails=8.0):
     tk = 0.5 * (0.5 * math.pi - theta_i)
     cuts = [0.0] + ([tk] if 0 < tk < tmax else []) + [tmax]
     total = 0.0
-    v, wv = _nodes(0.0, 1.0, n)
+    v, wv = end_clustered_nodes(0.0, 1.0, n)
     for a, b in zip(cuts[:-1], cuts[1:]):
-        th, wt = _nodes(a, b, n)
+        th, wt = end_clustered_nodes(a, b, n)
         with np.errstate(all="ignore"):
             cstar = -ci * np.cos(2 * th) / (np.sin(2 * th) * si) if si > 0 else np.full_like(th, -np.inf)
         phs = np.arccos(np.clip(np.nan_to_num(cstar, nan=-1.0, neginf=-1.0), -1.0, 1.0))
@@ -161,10 +161,12 @@ def check_reciprocal(model, n=2000, seed=2):
     assert np.allclose(fa, fb, rtol=1e-11, atol=1e-300)
 
 
-def hooks_agree(model, wi, wo, u, *, rtol=1e-12, atol=1e-300, rtol_sample=1e-9, atol_sample=1e-12):
+def hooks_agree(model, wi, wo, u, *, rtol=1e-12, atol=1e-300, rtol_sample=1e-9, atol_sample=1e-12,
+                finite=False):
     """The one-math rule: ``_f`` (per colour channel), ``_pdf`` and ``_sample`` give
-    the same numbers on ``drjit.llvm.Float64`` arrays as on NumPy.  Skips where
-    Dr.Jit's LLVM backend is missing.  Returns the NumPy pdf and sample."""
+    the same numbers on ``drjit.llvm.Float64`` arrays as on NumPy (``finite``: and
+    ``_f`` and ``_pdf`` are finite on both).  Skips where Dr.Jit's LLVM backend is
+    missing.  Returns the NumPy pdf and sample."""
     try:
         from drjit.llvm import Float64
         Float64(1.0) + 1.0
@@ -189,9 +191,11 @@ def hooks_agree(model, wi, wo, u, *, rtol=1e-12, atol=1e-300, rtol_sample=1e-9, 
         ref = np.broadcast_to(model._f(NP, comp(wi), comp(wo), pc), (n,))
         got = np.broadcast_to(np.asarray(model._f(ops, dcomp(wi), dcomp(wo), pc), dtype=np.float64), (n,))
         np.testing.assert_allclose(got, ref, rtol=rtol, atol=atol)
+        assert not finite or np.all(np.isfinite(ref))
     pdf = np.broadcast_to(model._pdf(NP, comp(wi), comp(wo), model.q), (n,))
     got = np.broadcast_to(np.asarray(model._pdf(ops, dcomp(wi), dcomp(wo), model.q), dtype=np.float64), (n,))
     np.testing.assert_allclose(got, pdf, rtol=rtol, atol=atol)
+    assert not finite or np.all(np.isfinite(pdf))
     smp = model._sample(NP, comp(wi), comp(u), model.q)
     got = model._sample(ops, dcomp(wi), dcomp(u), model.q)
     for r, g in zip(smp, got):

@@ -38,6 +38,7 @@ import numpy as np
 from . import vec
 from .ops import NP
 from .params import Param
+from .text import fmt
 
 #: Largest number of direction pairs evaluated in one NumPy pass; bigger batches
 #: are processed in chunks so memory stays bounded.
@@ -141,8 +142,9 @@ def _as_unit_interval(u) -> np.ndarray:
     if u.ndim == 0 or u.shape[-1] != 3:
         raise ValueError(f"u must have shape (..., 3), got {u.shape}")
     for b in _blocks(u):
-        if not np.all((b >= 0) & (b <= 1)):
-            raise ValueError("u must lie in [0, 1]")
+        bad = ~((b >= 0) & (b <= 1))
+        if np.any(bad):
+            raise ValueError(f"u must lie in [0, 1], got {float(b[bad][0])!r}")
     return u
 
 
@@ -324,16 +326,8 @@ class BxDF:
 
     # -- conveniences -------------------------------------------------------------
     def __repr__(self) -> str:
-        args = ", ".join(f"{k}={_fmt(v)}" for k, v in self.params.items())
+        args = ", ".join(f"{k}={fmt(v, other=repr)}" for k, v in self.params.items())
         return f"{type(self).__name__}({args})"
-
-
-def _fmt(v):
-    if isinstance(v, np.ndarray):
-        return "[" + ", ".join(f"{x:g}" for x in v) + "]"
-    if isinstance(v, float):
-        return f"{v:g}"
-    return repr(v)
 
 
 #: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).

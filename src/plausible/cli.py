@@ -8,11 +8,14 @@ import sys
 import click
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from . import registry
 from .analysis import albedo_curve, check as run_check, direction
+from .progress import reporting, silent, within
+from .text import fmt
 
 console = Console()
 
@@ -39,26 +42,60 @@ def _angles(text, what):
 
 
 class _Bar:
-    """Progress bar usable as the ``progress`` callback of the analysis functions."""
+    """The command line's progress display: a :mod:`plausible.progress` factory
+    showing one Rich bar per announced total (removed when it completes) on a
+    terminal, and nothing on a pipe.
 
-    def __init__(self, label, enabled=True):
-        self.label = label
+    A context manager, and the ambient reporter inside it: the display starts at
+    the first announced total and stops on leaving the ``with`` block, however
+    it is left (done, time limit, error, Ctrl-C), so the bar never stays on
+    screen and the cursor is always shown again.  ``main`` enters one for every
+    command (``click``'s ``with_resource``).
+    """
+
+    def __init__(self, enabled=True):
         self.enabled = enabled and console.is_terminal
+        self.prog = None
+        self._ambient = None
 
-    def __call__(self, total):
-        if not self.enabled:
-            return lambda: None
-        self.prog = Progress(TextColumn(self.label), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                             TimeElapsedColumn(), console=console, transient=True)
-        self.prog.start()
-        task = self.prog.add_task(self.label, total=total)
+    def __enter__(self):
+        self._ambient = reporting(self)
+        self._ambient.__enter__()
+        return self
 
-        def tick():
-            self.prog.advance(task)
-            if self.prog.tasks[0].finished:
+    def __exit__(self, *exc):
+        try:
+            if self.prog is not None:
                 self.prog.stop()
+                self.prog = None
+        finally:
+            self._ambient.__exit__(None, None, None)
+
+    def __call__(self, total, label=""):
+        if not self.enabled:
+            return silent(total)
+        if self.prog is None:
+            self.prog = Progress(TextColumn("{task.description}"), BarColumn(),
+                                 TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
+                                 console=console, transient=True)
+            self.prog.start()
+        prog = self.prog
+        task = prog.add_task(escape(label or "working"), total=total)
+        done = [0]
+
+        def tick(n=1):
+            if done[0] < total:
+                done[0] += n
+                prog.advance(task, n)
+                if done[0] >= total:      # a finished bar leaves the screen
+                    prog.remove_task(task)
 
         return tick
+
+
+def _bar():
+    """The command's progress display (see :class:`_Bar`)."""
+    return click.get_current_context().find_object(_Bar) or silent
 
 
 PARAM_OPT = click.option("-p", "--param", "params", multiple=True, metavar="NAME=VALUE",
@@ -67,12 +104,14 @@ PARAM_OPT = click.option("-p", "--param", "params", multiple=True, metavar="NAME
 
 @click.group(context_settings=dict(help_option_names=["-h", "--help"]))
 @click.version_option(package_name="plausible")
-def main():
+@click.pass_context
+def main(ctx):
     """Physically plausible reflection models of the Phong family.
 
     Evaluate, sample, verify and plot the models of Ashikhmin & Shirley (2000),
     Neumann, Neumann & Szirmay-Kalos (1999) and Lafortune & Willems (1994).
     """
+    ctx.obj = ctx.with_resource(_Bar())
 
 
 @main.command()
@@ -93,10 +132,8 @@ def models():
     console.print(t)
 
 
-def _fmt(v):
-    if isinstance(v, (list, tuple)):
-        return ",".join(f"{x:g}" if isinstance(x, float) else str(x) for x in v)
-    return f"{v:g}" if isinstance(v, float) else str(v)
+def _fmt(v):   # the syntax of -p: colours as r,g,b
+    return fmt(v, sep=",", brackets=False, sequences=(np.ndarray, list, tuple))
 
 
 @main.command("eval")
@@ -133,7 +170,7 @@ def check(model, params, as_json, all_models, quick):
         targets = [_model(model, params)]
     reports = []
     for m in targets:
-        rep = run_check(m, quick=quick, progress=_Bar(f"check {m.name}", not as_json))
+        rep = run_check(m, quick=quick, progress=silent if as_json else _bar())
         reports.append(rep)
         if not as_json:
             _print_report(rep)
@@ -172,8 +209,8 @@ def albedo(models, params, plot, phi, points):
 
     th = default_thetas(points)
     targets = [_model(spec, params) for spec in models]
-    tick = _Bar("albedo")(len(targets) * len(th))
-    curves = [(repr(m), th, albedo_curve(m, th, math.radians(phi), progress=tick)) for m in targets]
+    tick = _bar()(len(targets) * len(th), "albedo")
+    curves = [(repr(m), th, albedo_curve(m, th, math.radians(phi), progress=within(tick))) for m in targets]
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
     for label, _, _ in curves:
@@ -211,7 +248,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 
     try:
         res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
-                      seed=seed, time_limit=time_limit, progress=_Bar(f"fit {model}"))
+                      seed=seed, time_limit=time_limit, progress=_bar())
     except ValueError as e:
         _fail(str(e))
     console.print(f"[bold]{res.model.name}[/bold] fitted to {res.target.label} ({metric}, "
@@ -219,7 +256,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     t = Table()
     t.add_column("parameter"); t.add_column("value")
     for k, v in res.params.items():
-        t.add_row(k, _fmt(v.tolist() if isinstance(v, np.ndarray) else v))
+        t.add_row(k, _fmt(v))
     console.print(t)
     e = Table()
     e.add_column("error (every metric)"); e.add_column("value")
@@ -252,7 +289,7 @@ def figures(out, only, spp, resolution, quick, force, list_only):
         return
     try:
         res = F.run(out, only=list(only) or None, spp=spp, resolution=resolution, quick=quick, force=force,
-                    console=console)
+                    console=console, progress=_bar())
     except ValueError as e:
         _fail(str(e))
     sys.exit(0 if all(m["status"] == "ok" for m in res.values()) else 1)

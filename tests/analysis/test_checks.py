@@ -135,6 +135,34 @@ def test_chi2_fixed_coarse_grid_gives_false_failures_where_adaptive_passes():
     assert adaptive.passed
 
 
+def test_chi2_takes_a_binning_object_and_a_broken_one_fails():
+    """The binning is an object: the fixed one given directly is the test method="fixed"
+    names; a binning whose expected counts are off by 10% is rejected."""
+    from plausible.analysis.chi2 import Cells, FixedBinning
+
+    m = plausible.make("reciprocal-phong", n=20)
+    wi = direction(math.radians(30))
+    by_name = chi2(m, wi, n_samples=20_000, method="fixed", n_theta=8, n_phi=8)
+    by_object = chi2(m, wi, n_samples=20_000, binning=FixedBinning(8, 8))
+    assert by_object.statistic == by_name.statistic and by_name.passed
+
+    class Skewed(FixedBinning):
+        def cells(self, model, wi):
+            c = super().cells(model, wi)
+            bands = [(a, b, e, x * (1.1 if k % 2 else 0.9)) for k, (a, b, e, x) in enumerate(c.bands)]
+            return Cells(c.t_edges, bands, c.phi0)
+
+    assert chi2(m, wi, n_samples=20_000, binning=Skewed(8, 8)).p_value < 1e-10
+
+
+def test_chi2_errors_echo_the_value_given():
+    m = plausible.make("lambertian")
+    with pytest.raises(ValueError, match="method must be one of 'adaptive', 'fixed', got 'naive'"):
+        chi2(m, [0, 0, 1], method="naive")
+    with pytest.raises(ValueError, match="n_samples must be >= 1000, got 10"):
+        chi2(m, [0, 0, 1], n_samples=10)
+
+
 def test_chi2_sidak_correction():
     from plausible.analysis import sidak
 

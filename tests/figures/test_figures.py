@@ -29,7 +29,7 @@ pytestmark = pytest.mark.drjit
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("figures")
-    res = run(out, quick=True, progress=False)
+    res = run(out, quick=True)
     return out, res
 
 
@@ -145,11 +145,11 @@ def test_index_links_resolve(report):
 
 def test_rerun_uses_the_cache_and_changed_inputs_do_not(report):
     out, _ = report
-    again = run(out, only=["checks"], quick=True, progress=False)
+    again = run(out, only=["checks"], quick=True)
     assert again["checks"]["cached"] is True
-    changed = run(out, only=["checks"], quick=True, spp=3, progress=False)
+    changed = run(out, only=["checks"], quick=True, spp=3)
     assert changed["checks"]["cached"] is False
-    run(out, only=["checks"], quick=True, progress=False)   # restore for the other tests
+    run(out, only=["checks"], quick=True)   # restore for the other tests
 
 
 def test_measure_flags_a_check_that_does_not_hold(tmp_path):

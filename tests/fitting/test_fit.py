@@ -119,7 +119,7 @@ def test_bad_arguments():
 def test_progress_protocol():
     calls = []
 
-    def progress(total):
+    def progress(total, label=""):
         calls.append(total)
         return lambda: calls.append("tick")
 

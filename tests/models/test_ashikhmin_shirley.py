@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import hooks_agree
 from scipy import integrate, optimize, special, stats
 
 from plausible import registry, warps
@@ -621,31 +622,7 @@ def test_mixture_probability_is_per_direction_and_guarded():
     AshikhminShirleyDiffuse(rs=0.2, rd=0.7),
 ], ids=repr)
 def test_numpy_and_drjit_agree(model):
-    dr = pytest.importorskip("drjit")
-    from drjit.llvm import Float64
-
-    from plausible.ops import drjit_ops
-
-    D = drjit_ops(Float64)
     rng = np.random.default_rng(43)
     a, b, u = hemisphere(rng, 4000), hemisphere(rng, 4000), rng.random((4000, 3))
     a[0] = b[0] = [0.0, 0.0, 1.0]  # the pole (0/0 in the exponent)
-
-    def comps(x):
-        return tuple(Float64(np.ascontiguousarray(x[:, k])) for k in range(3))
-
-    def close(d, n):
-        d = np.array(d, dtype=float)
-        n = np.broadcast_to(np.asarray(n, dtype=float), d.shape)
-        assert np.all(np.isfinite(d))
-        np.testing.assert_allclose(d, n, rtol=1e-12, atol=1e-300)
-
-    split = lambda x: (x[:, 0], x[:, 1], x[:, 2])  # noqa: E731
-    close(model._f(D, comps(a), comps(b), model.p), model._f(NP, split(a), split(b), model.p))
-    close(model._pdf(D, comps(a), comps(b), model.q), model._pdf(NP, split(a), split(b), model.q))
-    wd = model._sample(D, comps(a), comps(u), model.q)
-    wn = model._sample(NP, split(a), split(u), model.q)
-    for k in range(3):
-        np.testing.assert_allclose(np.array(wd[k]), np.broadcast_to(wn[k], (4000,)),
-                                   rtol=1e-12, atol=1e-14)
-    dr.eval()
+    hooks_agree(model, a, b, u, rtol=1e-12, atol=1e-300, rtol_sample=1e-12, atol_sample=1e-14, finite=True)

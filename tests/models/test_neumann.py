@@ -4,19 +4,12 @@ import math
 
 import numpy as np
 import pytest
-from reference import check_drjit, check_reciprocal, check_sampling
+from reference import check_drjit, check_reciprocal, check_sampling, end_clustered_nodes
 from reference import mc_albedo_at as mc_albedo
 
 import plausible
 from plausible import fresnel
 from plausible.ops import NP
-
-
-def _nodes(a, b, n):
-    x, w = np.polynomial.legendre.leggauss(n)
-    s = 0.5 * (x + 1.0)
-    t = 0.5 * (1.0 - np.cos(np.pi * s))
-    return a + (b - a) * t, (b - a) * 0.25 * np.pi * np.sin(np.pi * s) * w
 
 
 def neumann_albedo(n, theta_i, c=None, N=300):
@@ -39,7 +32,7 @@ def neumann_albedo(n, theta_i, c=None, N=300):
     for a, b in zip(ys[:-1], ys[1:]):
         if b <= a:
             continue
-        y, w = _nodes(a, b, N)
+        y, w = end_clustered_nodes(a, b, N)
         ca = np.clip(y, 0, 1) ** (1.0 / (n + 1))
         sa = np.sqrt(np.maximum(1 - ca * ca, 0))
         ssa = np.where(sa > 0, sa, 1.0)

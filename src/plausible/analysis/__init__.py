@@ -7,9 +7,9 @@ and the optional ``peak_directions`` hint), so it works for any model.
 from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, direction, hemispherical_albedo, is_isotropic,
                      pdf_integral)
 from .checks import PropertyResult, energy, reciprocity, sampling_consistency
-from .chi2 import Chi2Result, chi2, sidak
+from .chi2 import AdaptiveBinning, Chi2Result, FixedBinning, chi2, sidak
 from .report import CheckReport, check
 
-__all__ = ["AlbedoResult", "CheckReport", "Chi2Result", "PropertyResult", "albedo", "albedo_curve", "albedo_table", "check",
-           "chi2", "direction", "energy", "hemispherical_albedo", "is_isotropic", "pdf_integral",
-           "reciprocity", "sampling_consistency", "sidak"]
+__all__ = ["AdaptiveBinning", "AlbedoResult", "CheckReport", "Chi2Result", "FixedBinning", "PropertyResult", "albedo",
+           "albedo_curve", "albedo_table", "check", "chi2", "direction", "energy", "hemispherical_albedo",
+           "is_isotropic", "pdf_integral", "reciprocity", "sampling_consistency", "sidak"]

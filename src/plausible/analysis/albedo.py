@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..progress import start
 from .quadrature import hemisphere_grid
 
 
@@ -108,17 +109,17 @@ def albedo_curve(model, thetas, phi: float = 0.0, progress=None, **kw) -> Albedo
     """Directional albedo at polar angles ``thetas`` (radians) and azimuth ``phi``.
 
     Returns an :class:`AlbedoResult` whose ``value``/``error`` have shape
-    ``(len(thetas),)`` (plus a channel axis for colour models).  ``progress``, if
-    given, is called with no argument after each angle.
+    ``(len(thetas),)`` (plus a channel axis for colour models).  ``progress``: a
+    :mod:`plausible.progress` factory, ticked after each angle.
     """
     thetas = np.atleast_1d(np.asarray(thetas, dtype=np.float64))
     if np.any(~np.isfinite(thetas)) or np.any(thetas < 0) or np.any(thetas > math.pi / 2):
         raise ValueError("thetas must lie in [0, pi/2] radians")
+    tick = start(progress, len(thetas), f"albedo {model.name}")
     res = []
     for t in thetas:
         res.append(albedo(model, direction(t, phi), **kw))
-        if progress:
-            progress()
+        tick()
     return AlbedoResult(np.array([r.value for r in res]), np.array([r.error for r in res]))
 
 
@@ -183,7 +184,8 @@ def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_thet
     the coarser table and divided by 8 (the ``O(h^3)`` rate), exceeds ``tol``, up to
     ``max_theta`` nodes.  The node on the horizon is evaluated 1e-6 rad above it
     (at exactly 90 degrees the albedo is zero by convention, not by continuity).
-    ``progress``, if given, is called with the number of albedo evaluations just done.
+    ``progress``: a :mod:`plausible.progress` factory, announced once per
+    refinement level (the number of albedos it evaluates) and ticked per albedo.
     """
     from ..tables import HALF_PI, AngleTable
 
@@ -191,22 +193,25 @@ def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_thet
         n_phi = 0 if is_isotropic(model) else 32
     phis = np.arange(n_phi) * (2 * math.pi / n_phi) if n_phi else np.zeros(1)
 
-    def column(theta):
+    def level(thetas):
+        tick = start(progress, len(thetas) * len(phis), f"albedo table {model.name}")
+        return np.array([column(t, tick) for t in thetas])
+
+    def column(theta, tick):
         t = min(theta, HALF_PI - 1e-6)
         row = [np.max(np.atleast_1d(albedo(model, direction(t, ph)).value)) for ph in phis]
-        if progress:
-            progress(len(phis))
+        tick(len(phis))
         return np.array(row) if n_phi else row[0]
 
     thetas = np.linspace(0.0, HALF_PI, n_theta)
-    vals = np.array([column(t) for t in thetas])
+    vals = level(thetas)
     while True:
         coarse = AngleTable(vals)
         n = 2 * len(vals) - 1
         if n > max_theta:
             return coarse
         mids = 0.5 * (thetas[:-1] + thetas[1:])
-        new = np.array([column(t) for t in mids])
+        new = level(mids)
         guess = coarse.lookup_angles(mids, phis if n_phi else None)
         fine = np.empty((n,) + vals.shape[1:])
         fine[0::2] = vals

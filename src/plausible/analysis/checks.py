@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..progress import start, within
+from ..text import jsonable
 from .albedo import albedo, direction, is_isotropic, pdf_integral
 
 #: Incidence angles (degrees) of the default energy grid: dense toward grazing.
@@ -32,24 +34,7 @@ class PropertyResult:
     details: dict = field(default_factory=dict)
 
     def to_dict(self):
-        return _jsonable(asdict(self))
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        v = float(x)
-        return v if math.isfinite(v) else str(v)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
+        return jsonable(asdict(self))
 
 
 def stratified_directions(n_theta: int, n_phi: int, rng, grazing: bool = True) -> np.ndarray:
@@ -103,8 +88,10 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
            progress=None) -> PropertyResult:
     """Max directional albedo over a grid of incidence directions (azimuths too
     for anisotropic models); passes when ``max a <= 1 + tol``.  ``tol`` matches the
-    integrator's accuracy target; each albedo's own error estimate is reported."""
+    integrator's accuracy target; each albedo's own error estimate is reported.
+    ``progress``: a :mod:`plausible.progress` factory, ticked per direction."""
     dirs = energy_directions(model, thetas_deg, phis_deg)
+    tick = start(progress, len(dirs), f"energy {model.name}")
     best = (-math.inf, None, None)
     curve = []
     for t, p in dirs:
@@ -114,14 +101,18 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
         curve.append((t, p, v, e))
         if v > best[0]:
             best = (v, (t, p), e)
-        if progress:
-            progress()
+        tick()
     fig, (t, p), e = best
     ok = fig <= 1.0 + tol
     return PropertyResult("energy", ok, fig, f"<= 1 + {tol:g} (max directional albedo)",
                           dict(theta_i_deg=t, phi_i_deg=p, albedo=fig, error=e),
                           dict(grid=[dict(theta_deg=a, phi_deg=b, albedo=c, error=d) for a, b, c, d in curve],
                                onset_deg=next((a for a, b, c, d in curve if c > 1 + tol), None)))
+
+
+#: The figures of :func:`sampling_consistency`, each the maximum over the incidences.
+SAMPLING_FIGURES = ("weight_rel_err", "pdf_rel_err", "max_pdf_integral", "max_invalid_fraction",
+                    "max_invalid_mismatch_sigma", "max_albedo_mismatch_sigma")
 
 
 def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 45),
@@ -136,63 +127,73 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
       within ``sigmas`` binomial standard deviations,
     * Monte Carlo albedo (mean weight) against the deterministic albedo, within
       ``sigmas`` standard errors (a second, independent method).
+
+    ``details`` holds each figure of :data:`SAMPLING_FIGURES` (the maximum over
+    the incidences), ``worst`` where each was reached and the first problems.
+    ``progress``: a :mod:`plausible.progress` factory, ticked per incidence.
     """
     rng = np.random.default_rng(seed)
-    worst = {}
-    figs = dict(weight_rel_err=0.0, pdf_rel_err=0.0, max_pdf_integral=0.0, max_invalid_fraction=0.0,
-                max_invalid_mismatch_sigma=0.0, max_albedo_mismatch_sigma=0.0)
-    ok = True
-    problems = []
     if is_isotropic(model):
         phis_deg = (0,)
+    tick = start(progress, len(phis_deg) * len(thetas_deg), f"sampling {model.name}")
+    figs = dict.fromkeys(SAMPLING_FIGURES, 0.0)
+    worst = {}
+    problems = []
     for p in phis_deg:
         for t in thetas_deg:
-            wi = direction(math.radians(t), math.radians(p))
-            u = rng.random((n_samples, 3))
-            s = model.sample(wi, u)
-            valid = s.pdf > 0
-            f = model.eval(wi, s.wo)
-            cos = np.maximum(s.wo[:, 2], 0)
-            expect = np.where(valid[:, None] if f.ndim > 1 else valid,
-                              f * ((cos / np.where(valid, s.pdf, 1))[:, None] if f.ndim > 1 else cos / np.where(valid, s.pdf, 1)), 0)
-            werr = np.max(np.abs(s.weight - expect) / np.maximum(np.abs(expect), 1e-12))
-            pdf2 = model.pdf(wi, s.wo)
-            perr = np.max(np.abs(pdf2 - s.pdf) / np.maximum(np.abs(s.pdf), 1e-12))
-            bad_nonfinite = not (np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.pdf)))
-            inv = 1.0 - valid.mean()
-            pint = pdf_integral(model, wi)
-            sig_inv = math.sqrt(max(inv * (1 - inv), 1.0 / n_samples) / n_samples)
-            inv_mis = abs((1.0 - pint.value) - inv) / (sig_inv + pint.error)
-            w = s.weight if s.weight.ndim == 1 else s.weight.mean(axis=-1)
-            mc = w.mean()
-            se = w.std(ddof=1) / math.sqrt(n_samples)
-            ref = albedo(model, wi)
-            refv = float(np.mean(ref.value))
-            alb_mis = abs(mc - refv) / (se + float(np.mean(ref.error)) + 1e-9)
             here = dict(theta_i_deg=t, phi_i_deg=p)
-            for key, val in (("weight_rel_err", werr), ("pdf_rel_err", perr),
-                             ("max_pdf_integral", pint.value), ("max_invalid_fraction", inv),
-                             ("max_invalid_mismatch_sigma", inv_mis), ("max_albedo_mismatch_sigma", alb_mis)):
+            wi = direction(math.radians(t), math.radians(p))
+            at, msgs = _sampling_at(model, wi, rng.random((n_samples, 3)), tol, sigmas)
+            for key, val in at.items():
                 if val > figs[key]:
                     figs[key] = float(val)
                     worst[key] = dict(here, value=float(val))
-            conds = [
-                (werr <= tol, f"weight != eval*cos/pdf (rel. err {werr:.3g}) at {here}"),
-                (perr <= tol, f"pdf(wi, sampled wo) != returned pdf (rel. err {perr:.3g}) at {here}"),
-                (pint.value <= 1 + 1e-4, f"pdf integrates to {pint.value:.6f} > 1 at {here}"),
-                (inv_mis <= sigmas, f"invalid fraction {inv:.4f} vs 1 - int pdf = {1 - pint.value:.4f} "
-                                    f"({inv_mis:.1f} sigma) at {here}"),
-                (alb_mis <= sigmas, f"Monte Carlo albedo {mc:.5f} +- {se:.1e} vs quadrature {refv:.5f} "
-                                    f"({alb_mis:.1f} sigma) at {here}"),
-                (not bad_nonfinite, f"non-finite weight or pdf at {here}"),
-            ]
-            for good, msg in conds:
-                if not good:
-                    ok = False
-                    problems.append(msg)
-            if progress:
-                progress()
+            problems += [f"{m} at {here}" for m in msgs]
+            tick()
     fig = max(figs["weight_rel_err"], figs["pdf_rel_err"])
-    return PropertyResult("sampling", ok, fig,
+    return PropertyResult("sampling", not problems, fig,
                           f"rel. err <= {tol:g}; int pdf <= 1; MC albedo and invalid fraction within {sigmas:g} sigma",
                           dict(worst, problems=problems[:5]), figs)
+
+
+def _sampling_at(model, wi, u, tol, sigmas):
+    """The figures of :func:`sampling_consistency` at one incidence ``wi`` from the
+    random numbers ``u``, and a message for each that fails."""
+    n = len(u)
+    s = model.sample(wi, u)
+    valid = s.pdf > 0
+    # the weight the contract promises: f cos / pdf on valid samples, 0 on the others
+    f = model.eval(wi, s.wo)
+    cos_over_pdf = np.maximum(s.wo[:, 2], 0) / np.where(valid, s.pdf, 1)
+    if f.ndim > 1:                     # colour: one channel axis
+        valid_c, cos_over_pdf = valid[:, None], cos_over_pdf[:, None]
+    else:
+        valid_c = valid
+    expect = np.where(valid_c, f * cos_over_pdf, 0)
+    werr = np.max(np.abs(s.weight - expect) / np.maximum(np.abs(expect), 1e-12))
+    perr = np.max(np.abs(model.pdf(wi, s.wo) - s.pdf) / np.maximum(np.abs(s.pdf), 1e-12))
+    finite = np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.pdf))
+    # invalid fraction against the pdf's missing mass
+    inv = 1.0 - valid.mean()
+    pint = pdf_integral(model, wi)
+    sig_inv = math.sqrt(max(inv * (1 - inv), 1.0 / n) / n)
+    inv_mis = abs((1.0 - pint.value) - inv) / (sig_inv + pint.error)
+    # Monte Carlo albedo (mean weight, channel mean) against quadrature
+    w = s.weight if s.weight.ndim == 1 else s.weight.mean(axis=-1)
+    mc = w.mean()
+    se = w.std(ddof=1) / math.sqrt(n)
+    ref = albedo(model, wi)
+    refv = float(np.mean(ref.value))
+    alb_mis = abs(mc - refv) / (se + float(np.mean(ref.error)) + 1e-9)
+    figs = dict(zip(SAMPLING_FIGURES, (werr, perr, pint.value, inv, inv_mis, alb_mis)))
+    conds = [
+        (werr <= tol, f"weight != eval*cos/pdf (rel. err {werr:.3g})"),
+        (perr <= tol, f"pdf(wi, sampled wo) != returned pdf (rel. err {perr:.3g})"),
+        (pint.value <= 1 + 1e-4, f"pdf integrates to {pint.value:.6f} > 1"),
+        (inv_mis <= sigmas, f"invalid fraction {inv:.4f} vs 1 - int pdf = {1 - pint.value:.4f} "
+                            f"({inv_mis:.1f} sigma)"),
+        (alb_mis <= sigmas, f"Monte Carlo albedo {mc:.5f} +- {se:.1e} vs quadrature {refv:.5f} "
+                            f"({alb_mis:.1f} sigma)"),
+        (finite, "non-finite weight or pdf"),
+    ]
+    return figs, [msg for good, msg in conds if not good]

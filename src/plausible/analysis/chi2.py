@@ -1,7 +1,11 @@
 """Pearson chi-square goodness-of-fit test of ``sample`` against ``pdf``.
 
 Stages (as in Mitsuba 3's ``mitsuba.chi2.ChiSquareTest``, with the binning and
-the integration adapted to sharp lobes):
+the integration adapted to sharp lobes).  Stages 1-2 are a *binning*, an object
+whose ``cells(model, wi)`` returns the :class:`Cells` (edges and expected
+fractions): :class:`AdaptiveBinning` by default, :class:`FixedBinning` for the
+naive test; :func:`_histogram` counts the samples in them, :func:`_pool` is
+stage 3 and :func:`_statistic` stage 4.
 
 1. **Cells.**  The hemisphere is cut into ``n_theta`` bands in ``theta_o`` and,
    within each band, ``n_phi`` cells in ``phi_o``, at the quantiles of the
@@ -31,11 +35,44 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import scipy.stats
 
+from ..text import jsonable
 from .quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
+
+__all__ = ["AdaptiveBinning", "BINNINGS", "Cells", "Chi2Result", "FixedBinning", "chi2", "sidak"]
 
 
 @dataclass
 class Chi2Result:
+    """Outcome of :func:`chi2`.
+
+    Attributes
+    ----------
+    passed : bool
+        ``p_value >= alpha``.
+    p_value : float
+        Probability of a statistic at least this large if ``sample`` draws from
+        ``pdf`` (0 when samples fell where the pdf integrates to zero).
+    statistic : float
+        Pearson's ``sum (observed - expected)^2 / expected`` over the pooled cells
+        (inf for the zero-cell failure).
+    dof : int
+        Degrees of freedom: pooled cells - 1 (0 for the zero-cell failure).
+    alpha : float
+        The per-test significance, Sidak-corrected (:func:`sidak`).
+    n_samples : int
+        Samples drawn.
+    n_cells : int
+        Cells compared, after pooling (with the cell of invalid samples).
+    wi : list
+        The incidence direction (unit vector).
+    message : str
+        One line: the verdict and its figures, or what failed.
+    worst_cells : list of dict
+        The cells contributing most to the statistic (at most five), each with
+        its ``theta_deg`` and ``phi_deg`` range (or a ``cell`` description),
+        ``observed``, ``expected`` and ``contribution``.
+    """
+
     passed: bool
     p_value: float
     statistic: float
@@ -48,9 +85,7 @@ class Chi2Result:
     worst_cells: list = field(default_factory=list)
 
     def to_dict(self):
-        from .checks import _jsonable
-
-        return _jsonable(asdict(self))
+        return jsonable(asdict(self))
 
 
 def sidak(alpha: float, n_tests: int) -> float:
@@ -81,6 +116,50 @@ def _pdf_grid(model, wi, tn, pn):
     wo = np.stack(np.broadcast_arrays(st[:, None] * np.cos(pn)[None, :],
                                       st[:, None] * np.sin(pn)[None, :], ct[:, None]), axis=-1)
     return model.pdf(wi, wo)
+
+
+@dataclass
+class Cells:
+    """The cells of one test: the ``theta_o`` band edges ``t_edges`` (radians), and
+    per band ``(theta_lo, theta_hi, phi_edges, expected)``, ``expected`` the
+    integral of the pdf over each cell of the band (a fraction of the samples);
+    ``phi_edges`` span ``[phi0 - pi, phi0 + pi]``."""
+
+    t_edges: np.ndarray
+    bands: list
+    phi0: float
+
+
+@dataclass(frozen=True)
+class AdaptiveBinning:
+    """Stages 1-2 of the module docstring: ``n_theta`` bands and ``n_phi`` cells per
+    band at the quantiles of the pdf, expected counts by graded Gauss-Legendre
+    panels of ``m`` nodes, refined until they settle."""
+
+    n_theta: int = 16
+    n_phi: int = 16
+    m: int = 8
+
+    def cells(self, model, wi) -> Cells:
+        return Cells(*_adaptive_cells(model, wi, self.n_theta, self.n_phi, self.m))
+
+
+@dataclass(frozen=True)
+class FixedBinning:
+    """The naive test, for comparison: cells uniform in ``(cos theta, phi)``, the pdf
+    integrated with an ``ires x ires`` midpoint rule per cell (what a fixed coarse
+    grid does; it misses sharp lobes at grazing incidence)."""
+
+    n_theta: int = 16
+    n_phi: int = 16
+    ires: int = 4
+
+    def cells(self, model, wi) -> Cells:
+        return Cells(*_fixed_cells(model, wi, self.n_theta, self.n_phi, self.ires))
+
+
+#: The binnings ``chi2(method=...)`` names.
+BINNINGS = {"adaptive": AdaptiveBinning, "fixed": FixedBinning}
 
 
 def _adaptive_cells(model, wi, n_theta, n_phi, m):
@@ -149,51 +228,68 @@ def _fixed_cells(model, wi, n_theta, n_phi, ires=4):
 
 def chi2(model, wi, *, n_samples: int = 200_000, n_theta: int = 16, n_phi: int = 16,
          alpha: float = 0.01, n_tests: int = 1, seed: int = 0, min_expected: float = 5.0,
-         m: int = 8, method: str = "adaptive") -> Chi2Result:
+         m: int = 8, method: str = "adaptive", binning=None) -> Chi2Result:
     """Chi-square test that ``model.sample(wi, .)`` draws from ``model.pdf(wi, .)``.
 
-    Returns :class:`Chi2Result`; ``passed`` is ``p_value >= sidak(alpha, n_tests)``.
+    ``binning``: an object whose ``cells(model, wi)`` gives the :class:`Cells`
+    (their edges and expected fractions); default, by ``method``:
+    :class:`AdaptiveBinning` (``"adaptive"``) or :class:`FixedBinning`
+    (``"fixed"``) with ``n_theta``, ``n_phi`` (and ``m``).  ``n_samples`` draws
+    with random numbers from ``seed``; cells expecting fewer than
+    ``min_expected`` samples are pooled.  Returns :class:`Chi2Result`;
+    ``passed`` is ``p_value >= sidak(alpha, n_tests)``.
     """
-    if method not in ("adaptive", "fixed"):
-        raise ValueError("method must be 'adaptive' or 'fixed'")
+    if binning is None:
+        if method not in BINNINGS:
+            raise ValueError(f"method must be one of {', '.join(map(repr, BINNINGS))}, got {method!r}")
+        binning = (AdaptiveBinning(n_theta, n_phi, m) if method == "adaptive"
+                   else FixedBinning(n_theta, n_phi))
     if n_samples < 1000:
-        raise ValueError("n_samples must be >= 1000")
+        raise ValueError(f"n_samples must be >= 1000, got {n_samples}")
     wi = np.asarray(wi, dtype=np.float64)
     wi = wi / np.linalg.norm(wi)
-    if method == "adaptive":
-        t_edges, cells, phi0 = _adaptive_cells(model, wi, n_theta, n_phi, m)
-    else:
-        t_edges, cells, phi0 = _fixed_cells(model, wi, n_theta, n_phi)
-    rng = np.random.default_rng(seed)
-    s = model.sample(wi, rng.random((n_samples, 3)))
+    a1 = sidak(alpha, n_tests)
+    cells = binning.cells(model, wi)
+    s = model.sample(wi, np.random.default_rng(seed).random((n_samples, 3)))
+    obs, exp, desc = _histogram(cells, s, n_samples)
+    zero = (exp <= 0) & (obs > 0)
+    if np.any(zero):      # samples where the pdf integrates to zero: no statistic needed
+        k = int(np.argmax(np.where(zero, obs, -1)))
+        msg = (f"{int(obs[zero].sum())} samples fell in {int(zero.sum())} cell(s) where the pdf "
+               f"integrates to zero, e.g. {desc[k]}")
+        return Chi2Result(False, 0.0, math.inf, 0, a1, n_samples, len(obs), wi.tolist(), msg,
+                          [dict(desc[k], observed=float(obs[k]), expected=0.0)])
+    o, e, d = _pool(obs, exp, desc, min_expected)
+    return _statistic(o, e, d, a1, n_samples, wi.tolist())
+
+
+def _histogram(cells: Cells, s, n_samples):
+    """Observed and expected counts per cell (``expected`` scaled to ``n_samples``),
+    and a description of each; the last cell holds the invalid samples (pdf 0 or
+    below the horizon), expected ``n_samples`` minus every other expectation."""
     valid = (s.pdf > 0) & (s.wo[:, 2] > 0)
-    theta, phi = _angles_of(s.wo[valid], phi0)
+    theta, phi = _angles_of(s.wo[valid], cells.phi0)
+    t_edges = cells.t_edges
     band = np.clip(np.searchsorted(t_edges, theta, side="right") - 1, 0, len(t_edges) - 2)
     obs, exp, desc = [], [], []
-    for b, (ta, tb, p_edges, exp_b) in enumerate(cells):
-        ph = phi[band == b]
-        idx = np.clip(np.searchsorted(p_edges, ph, side="right") - 1, 0, len(p_edges) - 2)
+    for b, (ta, tb, p_edges, exp_b) in enumerate(cells.bands):
+        idx = np.clip(np.searchsorted(p_edges, phi[band == b], side="right") - 1, 0, len(p_edges) - 2)
         obs.extend(np.bincount(idx, minlength=len(p_edges) - 1).tolist())
         exp.extend((exp_b * n_samples).tolist())
         for j in range(len(p_edges) - 1):
             desc.append(dict(theta_deg=(math.degrees(ta), math.degrees(tb)),
                              phi_deg=(math.degrees(p_edges[j]), math.degrees(p_edges[j + 1]))))
-    obs = np.array(obs, dtype=np.float64)
+    obs = np.append(np.array(obs, dtype=np.float64), float(n_samples - valid.sum()))
     exp = np.array(exp, dtype=np.float64)
-    n_invalid = float(n_samples - valid.sum())
-    obs = np.append(obs, n_invalid)
     exp = np.append(exp, max(n_samples - exp.sum(), 0.0))
     desc.append(dict(cell="invalid (below horizon / pdf 0)"))
-    a1 = sidak(alpha, n_tests)
-    wi_l = wi.tolist()
-    zero = (exp <= 0) & (obs > 0)
-    if np.any(zero):
-        k = int(np.argmax(np.where(zero, obs, -1)))
-        msg = (f"{int(obs[zero].sum())} samples fell in {int(zero.sum())} cell(s) where the pdf "
-               f"integrates to zero, e.g. {desc[k]}")
-        return Chi2Result(False, 0.0, math.inf, 0, a1, n_samples, len(obs), wi_l, msg,
-                          [dict(desc[k], observed=float(obs[k]), expected=0.0)])
-    # pool low cells
+    return obs, exp, desc
+
+
+def _pool(obs, exp, desc, min_expected):
+    """Stage 3: the cells expecting fewer than ``min_expected`` samples (smallest
+    first) pooled into one cell, or, if the pool itself is still too small, into
+    the smallest remaining cell.  Returns ``(observed, expected, descriptions)``."""
     order = np.argsort(exp)
     keep = np.ones(len(exp), bool)
     pool_o = pool_e = 0.0
@@ -215,8 +311,12 @@ def chi2(model, wi, *, n_samples: int = 200_000, n_theta: int = 16, n_phi: int =
             o.append(pool_o)
             e.append(pool_e)
             d.append(dict(cell="pooled low-expectation cells"))
-    o = np.array(o)
-    e = np.array(e)
+    return np.array(o), np.array(e), d
+
+
+def _statistic(o, e, d, alpha, n_samples, wi) -> Chi2Result:
+    """Stage 4: Pearson's statistic over the pooled cells, its p-value
+    (``scipy.stats.chi2.sf``) against ``alpha``, and the five worst cells."""
     contrib = (o - e) ** 2 / e
     stat = float(contrib.sum())
     dof = max(len(o) - 1, 1)
@@ -224,7 +324,7 @@ def chi2(model, wi, *, n_samples: int = 200_000, n_theta: int = 16, n_phi: int =
     top = np.argsort(contrib)[::-1][:5]
     worst = [dict(d[k], observed=float(o[k]), expected=float(e[k]), contribution=float(contrib[k]))
              for k in top]
-    passed = p >= a1
-    msg = (f"p = {p:.4g} {'>=' if passed else '<'} alpha = {a1:.3g} "
+    passed = p >= alpha
+    msg = (f"p = {p:.4g} {'>=' if passed else '<'} alpha = {alpha:.3g} "
            f"(chi2 = {stat:.1f}, dof = {dof}, {len(o)} cells)")
-    return Chi2Result(passed, p, stat, dof, a1, n_samples, len(o), wi_l, msg, worst)
+    return Chi2Result(passed, p, stat, dof, alpha, n_samples, len(o), wi, msg, worst)

@@ -7,7 +7,9 @@ import math
 from dataclasses import dataclass, field
 
 from .albedo import direction, is_isotropic
-from .checks import (ENERGY_THETAS, PropertyResult, _jsonable, energy, energy_directions, reciprocity,
+from ..progress import start, within
+from ..text import jsonable
+from .checks import (ENERGY_THETAS, PropertyResult, energy, energy_directions, reciprocity,
                      sampling_consistency)
 from .chi2 import chi2
 
@@ -35,7 +37,7 @@ class CheckReport:
         raise KeyError(name)
 
     def to_dict(self):
-        return _jsonable(dict(model=self.model, params=self.params, passed=self.passed,
+        return jsonable(dict(model=self.model, params=self.params, passed=self.passed,
                               results=[r.to_dict() for r in self.results]))
 
     def to_json(self, **kw) -> str:
@@ -81,8 +83,9 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     The chi-square significance ``alpha`` is family-wise over the tests run here
     (Sidak).  Its default, 0.001, keeps the registry-wide test suite (hundreds
     of chi-square tests) free of chance failures; a broken sampler gives
-    p-values below 1e-10.  ``quick`` uses fewer directions and samples.  ``progress`` is
-    called with ``(total_steps)`` once and then ``()`` after each step.
+    p-values below 1e-10.  ``quick`` uses fewer directions and samples.  ``progress``:
+    a :mod:`plausible.progress` factory, announced once with every step of every
+    property and ticked after each.
     """
     iso = is_isotropic(model)
     chi_dirs = CHI2_DIRECTIONS if iso else CHI2_DIRECTIONS_ANISO
@@ -92,23 +95,19 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     s_phis = (0,) if iso else (0, 45)
     n_s = 20_000 if quick else 50_000
     total = 1 + len(e_dirs) + len(s_thetas) * len(s_phis) + len(chi_dirs)
-    tick = None
-    if progress:
-        tick = progress(total)
-    rep = CheckReport(model.name, _jsonable(model.params))
+    tick = start(progress, total, f"check {model.name}")
+    rep = CheckReport(model.name, jsonable(model.params))
     rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24))
-    if tick:
-        tick()
-    rep.results.append(energy(model, thetas_deg=thetas, progress=tick))
+    tick()
+    rep.results.append(energy(model, thetas_deg=thetas, progress=within(tick)))
     rep.results.append(sampling_consistency(model, thetas_deg=s_thetas, phis_deg=s_phis,
-                                            n_samples=n_s, progress=tick))
+                                            n_samples=n_s, progress=within(tick)))
     results = []
     for k, (t, p) in enumerate(chi_dirs):
         r = chi2(model, direction(math.radians(t), math.radians(p)), alpha=alpha, seed=k,
                  n_tests=len(chi_dirs), n_samples=n_samples // (4 if quick else 1))
         results.append((t, p, r))
-        if tick:
-            tick()
+        tick()
     worst = min(results, key=lambda x: x[2].p_value)
     rep.results.append(PropertyResult(
         "chi2", all(r.passed for _, _, r in results), worst[2].p_value,

@@ -20,6 +20,9 @@ from typing import Callable
 
 import numpy as np
 
+from ..progress import silent, start
+from ..text import jsonable
+
 
 @dataclass(frozen=True)
 class Figure:
@@ -77,7 +80,8 @@ QUICK_RESOLUTION, QUICK_SPP = 48, 8
 class Context:
     """What a figure function writes through.  ``res(scale)`` and ``spp(scale)``
     give the image size / sample count for this run (``--resolution``, ``--spp``,
-    quick mode); the figure scales them for its own layout."""
+    quick mode); the figure scales them for its own layout.  ``progress``: a
+    :mod:`plausible.progress` factory, announced by :meth:`steps`."""
 
     def __init__(self, out: Path, *, resolution=None, spp=None, quick=False, progress=None):
         self.out = Path(out)
@@ -86,6 +90,8 @@ class Context:
         self.base_res = resolution or (QUICK_RESOLUTION if quick else DEFAULT_RESOLUTION)
         self.base_spp = spp or (QUICK_SPP if quick else DEFAULT_SPP)
         self._progress = progress
+        self._tick = silent(0)      # until steps() announces a total
+        self._total = self._done = 0
         self.items: list[dict] = []      # images, plots, data files, in order
         self.measurements: list[dict] = []
         self.notes: list[str] = []
@@ -100,12 +106,18 @@ class Context:
     # -- progress ---------------------------------------------------------------
     def steps(self, total: int):
         """Declare how many ``tick()`` calls this figure will make."""
-        if self._progress:
-            self._progress(total=total)
+        self._tick = start(self._progress, total)
+        self._total, self._done = total, 0
 
     def tick(self, n: int = 1):
-        if self._progress:
-            self._progress(advance=n)
+        """One step (or ``n``) of those declared by :meth:`steps` done."""
+        self._done += n
+        self._tick(n)
+
+    def finish(self):
+        """Count the steps the figure declared but did not tick (the runner calls it)."""
+        if self._done < self._total:
+            self.tick(self._total - self._done)
 
     # -- outputs ----------------------------------------------------------------
     def image(self, name: str, img, exposure: float = 1.0, caption: str = "") -> np.ndarray:
@@ -134,7 +146,7 @@ class Context:
         self.items.append(dict(kind="data", file=f"{name}.csv", caption=caption))
 
     def json(self, name: str, obj, caption: str = ""):
-        (self.out / f"{name}.json").write_text(json.dumps(obj, indent=1, default=_jsonable))
+        (self.out / f"{name}.json").write_text(json.dumps(jsonable(obj), indent=1, default=str))
         self.items.append(dict(kind="data", file=f"{name}.json", caption=caption))
 
     def file(self, name: str, caption: str = ""):
@@ -163,14 +175,6 @@ def _num(x):
         return None
     x = float(x)
     return x if math.isfinite(x) else str(x)
-
-
-def _jsonable(o):
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    return str(o)
 
 
 def run(out, **kw):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from plausible import registry
+from plausible.progress import start, within
 
 from . import figure
 
@@ -12,15 +13,15 @@ QUICK_MODELS = ("lambertian", "modified-phong", "ashikhmin-shirley")
 def check_table(models, progress=None):
     """:func:`plausible.check` (quick mode) of each model; returns ``(reports, markdown)``.
 
-    ``progress`` is called with no argument after each model.
+    ``progress``: a :mod:`plausible.progress` factory, ticked after each model.
     """
     from plausible.analysis import check
 
+    tick = start(progress, len(models), "checks")
     reports = []
     for m in models:
         reports.append(check(m, quick=True))
-        if progress:
-            progress()
+        tick()
     lines = ["| model | parameters | claims plausible | reciprocity | energy (max albedo) | sampling | chi2 (p) |",
              "|---|---|---|---|---|---|---|"]
     for m, r in zip(models, reports):
@@ -44,7 +45,7 @@ def checks(ctx, variants):
     else:
         models = [m for name in registry.names() for m in model_variants(name)]
     ctx.steps(len(models))
-    reports, md = check_table(models, progress=ctx.tick)
+    reports, md = check_table(models, progress=within(ctx.tick))
     (ctx.out / "check.md").write_text(md)
     ctx.file("check.md", "the table")
     ctx.json("check", [r.to_dict() for r in reports], "every report")

@@ -10,6 +10,7 @@ import numpy as np
 from plausible import registry
 from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
+from plausible.progress import within
 
 from . import figure
 
@@ -46,7 +47,7 @@ def _lobe_figure(ctx, model_name, incidence):
     info = registry.info(model_name)
     th = default_thetas(24 if not ctx.quick else 6)
     ctx.steps(len(th))
-    alb = albedo_curve(m, th, progress=ctx.tick)
+    alb = albedo_curve(m, th, progress=within(ctx.tick))
     a = np.asarray(alb.value)
     a = a.mean(axis=-1) if a.ndim > 1 else a
     view = np.linspace(-90, 90, 721)

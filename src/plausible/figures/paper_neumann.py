@@ -10,6 +10,7 @@ import numpy as np
 import plausible
 from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
+from plausible.progress import within
 
 from . import figure
 from .lobes import plane_f
@@ -43,7 +44,7 @@ def albedo_figure(ctx, name, title, specs, points=46):
     ctx.steps(len(specs) * len(th))
     curves = {}
     for label, m in specs.items():
-        r = albedo_curve(m, th, progress=ctx.tick)
+        r = albedo_curve(m, th, progress=within(ctx.tick))
         v = np.asarray(r.value)
         curves[label] = v.mean(axis=-1) if v.ndim > 1 else v
     fig, ax = plt.subplots(figsize=(6.2, 4.0))

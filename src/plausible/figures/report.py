@@ -16,8 +16,9 @@ import traceback
 from pathlib import Path
 
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..progress import start
+from ..text import fmt
 from . import FIGURES, Context, get, names
 
 _PKG = Path(__file__).resolve().parent.parent
@@ -62,7 +63,7 @@ def _cached(d: Path, key: str):
 
 
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
-        progress=True) -> dict:
+        progress=None) -> dict:
     """Make the figures (all, or the names in ``only``) into ``out`` and write
     ``out/index.html``.  Returns ``{name: figure.json contents}``; each has
     ``status`` ("ok" or "failed"), ``cached`` and ``seconds``.
@@ -70,6 +71,8 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     ``spp`` / ``resolution`` override the samples per pixel / base image size
     (defaults :data:`plausible.figures.DEFAULT_SPP` / ``DEFAULT_RESOLUTION``);
     ``quick`` uses small ones (the CI mode).  Deterministic: fixed seeds.
+    ``progress``: a :mod:`plausible.progress` factory, announced once per figure
+    (labelled with its name); a line per figure says how it went.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -78,45 +81,34 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     src = source_hash()
     results = {}
     t_all = time.time()
-    prog = Progress(TextColumn("{task.description:<22}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                    TimeElapsedColumn(), TextColumn("{task.fields[status]}"), console=console,
-                    disable=not progress)
-    with prog:
-        for name in todo:
-            fig = FIGURES[name]
-            d = out / name
-            key = input_key(fig, resolution=resolution, spp=spp, quick=quick, src=src)
-            task = prog.add_task(name, total=1, status="")
-            m = None if force else _cached(d, key)
-            if m is not None:
-                m["cached"] = True
-                prog.update(task, completed=1, total=1, status="cached")
-                results[name] = m
-                continue
-
-            def cb(total=None, advance=None, _t=task):
-                if total is not None:
-                    prog.update(_t, total=total, completed=0)
-                if advance:
-                    prog.advance(_t, advance)
-
-            ctx = Context(d, resolution=resolution, spp=spp, quick=quick, progress=cb)
-            t0 = time.time()
-            m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
-                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick)
-            try:
-                fig.fn(ctx, **fig.params)
-                m["status"] = "ok"
-            except Exception:   # a failing figure is reported, the others still run
-                m["status"] = "failed"
-                m["error"] = traceback.format_exc()
-                console.print(f"[red]figure {name} failed:[/red]\n{m['error']}")
-            m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
-                     seconds=round(time.time() - t0, 1), cached=False)
-            (d / "figure.json").write_text(json.dumps(m, indent=1))
-            t = prog.tasks[[x.id for x in prog.tasks].index(task)]
-            prog.update(task, completed=t.total, status=f"{m['status']} {m['seconds']} s")
+    for name in todo:
+        fig = FIGURES[name]
+        d = out / name
+        key = input_key(fig, resolution=resolution, spp=spp, quick=quick, src=src)
+        m = None if force else _cached(d, key)
+        if m is not None:
+            m["cached"] = True
+            console.print(f"{name:<22} cached")
             results[name] = m
+            continue
+        ctx = Context(d, resolution=resolution, spp=spp, quick=quick,
+                      progress=lambda total, label="", _n=name: start(progress, total, _n))
+        t0 = time.time()
+        m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
+                 key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick)
+        try:
+            fig.fn(ctx, **fig.params)
+            m["status"] = "ok"
+        except Exception:   # a failing figure is reported, the others still run
+            m["status"] = "failed"
+            m["error"] = traceback.format_exc()
+            console.print(f"[red]figure {name} failed:[/red]\n{m['error']}")
+        ctx.finish()
+        m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
+                 seconds=round(time.time() - t0, 1), cached=False)
+        (d / "figure.json").write_text(json.dumps(m, indent=1))
+        console.print(f"{name:<22} {m['status']} {m['seconds']} s")
+        results[name] = m
     # the index lists every figure present in out/, not only this run's
     allm = {}
     for n in names():
@@ -163,12 +155,9 @@ _JS = """<script>
 </script>"""
 
 
-def _fmt(x):
-    if x is None:
-        return ""
-    if isinstance(x, float):
-        return f"{x:.6g}"
-    return html.escape(str(x))
+def _cell(x):
+    """A measurement's number (or text) in a table cell."""
+    return "" if x is None else html.escape(fmt(x, ".6g"))
 
 
 def write_index(out: Path, figs: dict) -> Path:
@@ -212,8 +201,8 @@ def write_index(out: Path, figs: dict) -> Path:
                 ok = x.get("ok")
                 cls = "" if ok is None else ("ok" if ok else "bad")
                 verdict = "" if ok is None else ("holds" if ok else "DOES NOT HOLD")
-                parts.append(f"<tr><td>{e(x['quantity'])}</td><td>{_fmt(x['measured'])}</td>"
-                             f"<td>{_fmt(x['expected'])}</td><td>{_fmt(x['tol'])}</td>"
+                parts.append(f"<tr><td>{e(x['quantity'])}</td><td>{_cell(x['measured'])}</td>"
+                             f"<td>{_cell(x['expected'])}</td><td>{_cell(x['tol'])}</td>"
                              f"<td class='{cls}'>{verdict}</td><td>{e(x.get('note', ''))}</td></tr>")
             parts.append("</table>")
         for t in m.get("notes", []):

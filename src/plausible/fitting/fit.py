@@ -45,6 +45,8 @@ import numpy as np
 from .. import registry
 from ..analysis import albedo_curve, direction
 from ..bxdf import BxDF
+from ..progress import start
+from ..text import fmt
 from . import metrics as M
 
 PENALTY = 1e6
@@ -248,15 +250,9 @@ class FitResult:
                 "evaluations": self.evaluations, "timed_out": self.timed_out, "seconds": self.seconds}
 
     def summary(self) -> str:
-        ps = ", ".join(f"{k}={_fmt(v)}" for k, v in self.params.items())
+        ps = ", ".join(f"{k}={fmt(v, '.5g', sep=',')}" for k, v in self.params.items())
         es = ", ".join(f"{k}={v:.4g}" for k, v in self.errors.items() if v is not None)
         return f"{self.model.name} ({self.metric}): {ps}\n  errors: {es}"
-
-
-def _fmt(v):
-    if isinstance(v, np.ndarray):
-        return "[" + ",".join(f"{x:.5g}" for x in v) + "]"
-    return f"{v:.5g}" if isinstance(v, float) else str(v)
 
 
 # -- the fit ------------------------------------------------------------------------------
@@ -271,9 +267,9 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     (choice parameters such as Ward's ``variant`` go here too).  ``starts``:
     number of optimiser starts (the first from the defaults).  ``time_limit``
     (seconds): stop starting/continuing optimisations after this long and
-    return the best point found (``timed_out`` is then True).  ``progress``:
-    ``progress(total)`` returning a ``tick()`` called after each optimisation
-    (the CLI's progress bar protocol).  ``combine``: how the perceptual metric
+    return the best point found (``timed_out`` is then True).  ``progress``: a
+    :mod:`plausible.progress` factory, announced with the number of
+    optimisations and ticked after each.  ``combine``: how the perceptual metric
     joins its two maxima, ``"sum"`` (default) or ``"max"``.  ``thetas_deg``:
     incidence angles of the samples and albedo terms for a model target;
     ``target_albedo = (thetas_deg, values)``: the albedo of a table target.
@@ -283,140 +279,199 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     ``max_k |ln((c_k + eps)/(g_k + eps))| + max_j |ln(a_j / A_j)|``, the maximal
     relative errors of ``f cos`` and of the albedo (Neumann, Neumann &
     Szirmay-Kalos 1999, section 1.1).  Returns a :class:`FitResult`.
+
+    The steps are those of the module docstring.
     """
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
-    M._combine(0.0, 0.0, combine)
+    M.check_combine(combine)
     if starts < 1:
         raise ValueError(f"starts must be >= 1, got {starts}")
     t0 = time.monotonic()
-    deadline = None if time_limit is None else t0 + float(time_limit)
     info = registry.info(model_name)
     fixed = dict(fixed or {})
     tgt = as_target(target, thetas_deg=thetas_deg, target_albedo=target_albedo)
-    use_albedo = metric == "perceptual" and tgt.albedo is not None
     proto = info.cls(**fixed)
-    peaks_of = [proto.peak_directions] + list(tgt.peaks)
-    fast = _FastAlbedo(tgt.thetas, peaks_of) if use_albedo else None
-    eps = M.floor(tgt.fcos)
-    # a parameter whose default is None resolves from the others (neumann-metal's c):
-    # leave it out so that it follows them
-    base = {k: v for k, v in proto.params.items()
-            if k in fixed or info.param(k).default is not None}
-    free = _free_params(info, proto, fixed, tgt)
-    C = tgt.channels
-    colour_free = [p.name for p in free if p.kind == "color"]
-    total = starts + (C * 1 if (C and colour_free) else 0)
-    tick = progress(total) if progress else (lambda: None)
-    state = {"evals": 0, "timed_out": False}
+    problem = _Problem.make(info, proto, tgt, metric, combine, maxiter,
+                            None if time_limit is None else t0 + float(time_limit))
+    # 1. free parameters; a parameter whose default is None resolves from the
+    # others (neumann-metal's c): leave it out so that it follows them
+    base = {k: v for k, v in proto.params.items() if k in fixed or info.param(k).default is not None}
+    vars_ = [_Var(p) for p in _free_params(info, proto, fixed, tgt)]
+    colour_vars = [v for v in vars_ if v.kind == "color"] if tgt.channels else []
+    tick = start(progress, starts + (tgt.channels if colour_vars else 0), f"fit {model_name}")
+    # 2-3. multi-start on the channel mean, colours as scalars
+    params, objectives = _fit_shared(problem, vars_, base, starts, seed, tick)
+    # 4. colours per channel
+    if colour_vars and not any(o.timed_out for o in objectives):
+        params, more = _fit_channels(problem, colour_vars, params, base, tick)
+        objectives += more
+    params.update({k: v for k, v in base.items() if isinstance(v, np.ndarray) and k in fixed})
+    # 5. every metric's figure, albedo by the accurate integrator
+    model = info.cls(**params)
+    out = evaluate_fit(model, tgt, problem.eps, combine)
+    return FitResult(model, {k: model.params[k] for k in model.params}, metric, out["errors"], tgt,
+                     sum(o.evaluations for o in objectives), any(o.timed_out for o in objectives),
+                     time.monotonic() - t0, out["albedo"])
 
-    def channel(g, c):
-        if g is None:
-            return None
-        return g.mean(axis=-1) if (c is None and g.ndim == 2) else (g[..., c] if c is not None else g)
 
-    def make_objective(vars_, params0, c):
-        g = channel(tgt.fcos, c)
-        A = channel(tgt.albedo, c) if use_albedo else None
-        best = {"v": math.inf, "x": None}
+@dataclass
+class _Problem:
+    """What every objective of one fit shares: the model class, the target, the
+    metric and its settings, the albedo rule (None without an albedo term) and
+    the deadline (``time.monotonic()`` seconds, or None)."""
 
-        def model_at(x):
-            ps = dict(params0)
-            for v, xi in zip(vars_, x):
-                ps[v.name] = v.inv(xi)
-            return info.cls(**ps)
+    info: object
+    tgt: Target
+    metric: str
+    combine: str
+    eps: float
+    fast: _FastAlbedo | None
+    maxiter: int
+    deadline: float | None
 
-        def evaluate(x, beta=None):
-            if deadline is not None and time.monotonic() > deadline:
-                state["timed_out"] = True
-                raise _Timeout
-            state["evals"] += 1
-            try:
-                m = model_at(x)
-            except ValueError:
-                return PENALTY
-            cc = _reduce(m.eval(tgt.wi, tgt.wo), tgt.wo, c)
-            a = _reduce_alb(fast(m), c) if use_albedo else None
-            if beta is None:
-                e = M.errors(cc, g, a, A, eps, combine)
-                return {"l2-cos": e["l2-cos"] ** 2, "log": e["log"] ** 2}.get(metric, e["perceptual"])
-            return M.objective(metric, cc, g, a, A, eps, beta=beta, combine=combine)
+    @classmethod
+    def make(cls, info, proto, tgt, metric, combine, maxiter, deadline):
+        use_albedo = metric == "perceptual" and tgt.albedo is not None
+        fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
+        return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline)
 
-        def tracked(x, beta=None):
-            v = evaluate(x, beta)
-            if beta is None and v < best["v"]:
-                best["v"], best["x"] = v, np.array(x)
-            return v
 
-        return tracked, model_at, best
+def _channel(g, c):
+    """Channel ``c`` of ``g`` (the channel mean if ``c`` is None)."""
+    if g is None:
+        return None
+    return g.mean(axis=-1) if (c is None and g.ndim == 2) else (g[..., c] if c is not None else g)
 
-    def optimise(vars_, params0, c, x0s):
-        from scipy.optimize import minimize
 
-        fun, model_at, best = make_objective(vars_, params0, c)
-        bounds = [v.bounds for v in vars_]
-        for x0 in x0s:
-            try:
-                x = np.array(x0, float)
-                if metric == "perceptual":
-                    for beta in (20.0, 200.0, 2000.0):
-                        r = minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
-                                     options=dict(maxiter=maxiter, eps=1e-7))
-                        x = r.x
-                        fun(x)
-                    # derivative-free polish on the true figure (slides along constraints)
-                    minimize(fun, x, method="Nelder-Mead", bounds=bounds,
-                             options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
-                else:
-                    r = minimize(fun, x, method="L-BFGS-B", bounds=bounds,
-                                 options=dict(maxiter=maxiter, eps=1e-7, ftol=1e-14, gtol=1e-10))
-                    fun(r.x)
-                    # derivative-free polish: L-BFGS-B stops where a constraint the model
-                    # enforces by ValueError (kd + ks <= 1) cuts its line search
-                    minimize(fun, best["x"], method="Nelder-Mead", bounds=bounds,
-                             options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
-            except _Timeout:
-                pass
-            tick()
-            if state["timed_out"]:
-                break
-        if best["x"] is None:
-            best["x"] = np.array(x0s[0], float)
-        return {v.name: v.inv(xi) for v, xi in zip(vars_, best["x"])}
+class _Objective:
+    """The figure minimised over the variables ``vars_`` (the other parameters at
+    ``params0``), on channel ``c`` of the target (None: the channel mean).
 
-    vars_ = [_Var(p) for p in free]
-    params = dict(base)
-    for k, v in params.items():           # colours as scalars (channel means) for the shared fit
-        if isinstance(v, np.ndarray):
-            params[k] = float(np.mean(v))
+    Calling it with ``beta`` gives the smooth bound the optimiser descends
+    (:func:`plausible.fitting.metrics.objective`); without, the true figure
+    (the square of the least-squares figures), and the best point so far is kept
+    (``best_x``, ``best_value``).  A parameter set the model rejects costs
+    :data:`PENALTY`.  Past the problem's deadline a call raises ``_Timeout`` and
+    sets ``timed_out``; ``evaluations`` counts the calls before it.
+    """
+
+    def __init__(self, problem: _Problem, vars_, params0, c=None):
+        self.problem, self.vars, self.params0, self.c = problem, vars_, params0, c
+        self.g = _channel(problem.tgt.fcos, c)
+        self.A = _channel(problem.tgt.albedo, c) if problem.fast else None
+        self.evaluations = 0
+        self.timed_out = False
+        self.best_value, self.best_x = math.inf, None
+
+    def model_at(self, x):
+        ps = dict(self.params0)
+        for v, xi in zip(self.vars, x):
+            ps[v.name] = v.inv(xi)
+        return self.problem.info.cls(**ps)
+
+    def __call__(self, x, beta=None):
+        pb = self.problem
+        if pb.deadline is not None and time.monotonic() > pb.deadline:
+            self.timed_out = True
+            raise _Timeout
+        self.evaluations += 1
+        v = self._figure(x, beta)
+        if beta is None and v < self.best_value:
+            self.best_value, self.best_x = v, np.array(x)
+        return v
+
+    def _figure(self, x, beta):
+        pb = self.problem
+        try:
+            m = self.model_at(x)
+        except ValueError:
+            return PENALTY
+        cc = _reduce(m.eval(pb.tgt.wi, pb.tgt.wo), pb.tgt.wo, self.c)
+        a = _reduce_alb(pb.fast(m), self.c) if pb.fast else None
+        if beta is None:
+            e = M.errors(cc, self.g, a, self.A, pb.eps, pb.combine)
+            return {"l2-cos": e["l2-cos"] ** 2, "log": e["log"] ** 2}.get(pb.metric, e["perceptual"])
+        return M.objective(pb.metric, cc, self.g, a, self.A, pb.eps, beta=beta, combine=pb.combine)
+
+    def best_params(self, x_default) -> dict:
+        """The best point found as parameter values (``x_default`` if none was)."""
+        x = self.best_x if self.best_x is not None else np.array(x_default, float)
+        return {v.name: v.inv(xi) for v, xi in zip(self.vars, x)}
+
+
+def _optimise(fun: _Objective, x0s, tick) -> dict:
+    """Step 3 from each start in ``x0s``: L-BFGS-B (on the smooth bounds at
+    ``beta = 20, 200, 2000`` for ``perceptual``), then a bounded Nelder-Mead
+    polish on the true figure; ``tick()`` after each start; stop at the deadline.
+    Returns the best point's parameter values."""
+    from scipy.optimize import minimize
+
+    bounds = [v.bounds for v in fun.vars]
+    maxiter = fun.problem.maxiter
+    for x0 in x0s:
+        try:
+            x = np.array(x0, float)
+            if fun.problem.metric == "perceptual":
+                for beta in (20.0, 200.0, 2000.0):
+                    r = minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
+                                 options=dict(maxiter=maxiter, eps=1e-7))
+                    x = r.x
+                    fun(x)
+                # derivative-free polish on the true figure (slides along constraints)
+                minimize(fun, x, method="Nelder-Mead", bounds=bounds,
+                         options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
+            else:
+                r = minimize(fun, x, method="L-BFGS-B", bounds=bounds,
+                             options=dict(maxiter=maxiter, eps=1e-7, ftol=1e-14, gtol=1e-10))
+                fun(r.x)
+                # derivative-free polish: L-BFGS-B stops where a constraint the model
+                # enforces by ValueError (kd + ks <= 1) cuts its line search
+                minimize(fun, fun.best_x, method="Nelder-Mead", bounds=bounds,
+                         options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
+        except _Timeout:
+            pass
+        tick()
+        if fun.timed_out:
+            break
+    return fun.best_params(x0s[0])
+
+
+def _fit_shared(problem, vars_, base, starts, seed, tick):
+    """Steps 2-3: every free parameter, colours as scalars (channel means), fitted
+    to the channel mean from the defaults and ``starts - 1`` seeded random points.
+    Returns the parameters and the objectives used."""
+    params = {k: float(np.mean(v)) if isinstance(v, np.ndarray) else v for k, v in base.items()}
+    if not vars_:
+        tick()
+        return params, []
     rng = np.random.default_rng(seed)
     x_def = [v.fwd(params[v.name]) for v in vars_]
     x0s = [x_def] + [[rng.uniform(*v.bounds) for v in vars_] for _ in range(starts - 1)]
-    x0s = [_feasible(info, params, vars_, x, rng) for x in x0s]
-    if vars_:
-        params.update(optimise(vars_, params, None, x0s))
-    else:
-        tick()
-    if C and colour_free and not state["timed_out"]:
-        cvars = [v for v in vars_ if v.kind == "color"]
-        per = {v.name: [] for v in cvars}
-        for c in range(C):
-            pc = dict(params)             # fixed colours: this channel's value
-            pc.update({k: float(np.asarray(v)[c]) for k, v in base.items()
-                       if isinstance(v, np.ndarray) and v.size == C})
-            res = optimise(cvars, pc, c, [[v.fwd(params[v.name]) for v in cvars]])
-            for k, val in res.items():
-                per[k].append(val)
-        for k, vals in per.items():
-            if len(vals) == C:
-                params[k] = np.array(vals)
-    for k, v in base.items():             # fixed colours as given
-        if isinstance(v, np.ndarray) and k in fixed:
-            params[k] = v
-    model = info.cls(**params)
-    out = evaluate_fit(model, tgt, eps, combine)
-    return FitResult(model, {k: model.params[k] for k in model.params}, metric, out["errors"], tgt,
-                     state["evals"], state["timed_out"], time.monotonic() - t0, out["albedo"])
+    x0s = [_feasible(problem.info, params, vars_, x, rng) for x in x0s]
+    obj = _Objective(problem, vars_, params, None)
+    params.update(_optimise(obj, x0s, tick))
+    return params, [obj]
+
+
+def _fit_channels(problem, cvars, params, base, tick):
+    """Step 4: the colour parameters ``cvars`` refitted on each channel, from the
+    shared fit, with the other parameters fixed (fixed colours at this channel's
+    value).  Returns the parameters with colours and the objectives used."""
+    C = problem.tgt.channels
+    per = {v.name: [] for v in cvars}
+    objectives = []
+    for c in range(C):
+        pc = dict(params)
+        pc.update({k: float(np.asarray(v)[c]) for k, v in base.items()
+                   if isinstance(v, np.ndarray) and v.size == C})
+        obj = _Objective(problem, cvars, pc, c)
+        objectives.append(obj)
+        for k, val in _optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
+            per[k].append(val)
+    params = dict(params)
+    params.update({k: np.array(vals) for k, vals in per.items() if len(vals) == C})
+    return params, objectives
 
 
 def _reduce(f, wo, c):

@@ -65,10 +65,15 @@ def albedo_error(a, A) -> float:
 COMBINE = ("sum", "max")
 
 
-def _combine(ef, ea, combine):
+def check_combine(combine: str) -> str:
+    """``combine`` if it is one of :data:`COMBINE`, else a ValueError naming it."""
     if combine not in COMBINE:
         raise ValueError(f"combine must be one of {', '.join(COMBINE)}, got {combine!r}")
-    return ef + ea if combine == "sum" else max(ef, ea)
+    return combine
+
+
+def _combine(ef, ea, combine):
+    return ef + ea if check_combine(combine) == "sum" else max(ef, ea)
 
 
 def errors(c, g, a=None, A=None, eps=None, combine: str = "sum") -> dict:
@@ -125,7 +130,7 @@ def objective(metric: str, c, g, a=None, A=None, eps=None, beta: float = 50.0,
         ra = np.log(np.maximum(a[ok], 1e-300) / A[ok])
         if combine == "max":
             return _smooth_max_abs(np.concatenate([rf, ra]), beta)
-        _combine(0, 0, combine)
+        check_combine(combine)
         return _smooth_max_abs(rf, beta) + (_smooth_max_abs(ra, beta) if ra.size else 0.0)
     raise ValueError(f"metric must be one of {', '.join(METRICS)}, got {metric!r}")
 

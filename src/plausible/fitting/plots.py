@@ -65,7 +65,8 @@ def plot_plane(result, path, thetas_deg=PLANE_THETAS_DEG, n: int = 361):
 def write_plots(result, out_dir, points: int = 24, progress=None) -> list:
     """Write ``plane.png`` (:func:`plot_plane`), ``albedo.png`` (target and fit
     albedo curves, accurate integrator) and ``fit.json`` (parameters and errors)
-    into ``out_dir``; returns the paths."""
+    into ``out_dir``; returns the paths.  ``progress``: a :mod:`plausible.progress`
+    factory (one count per albedo curve)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [plot_plane(result, out / "plane.png")]

@@ -21,6 +21,8 @@ Notation: ``k1 = wi``, ``k2 = wo``, ``u = x``, ``v = y``, ``n = z``.
 
 from __future__ import annotations
 
+import numpy as np
+
 from .. import vec, warps
 from ..bxdf import BxDF, above
 from ..fresnel import schlick
@@ -225,8 +227,6 @@ class AshikhminShirleyDiffuse(BxDF):
     PARAMS = (RS, RD)
 
     def peak_directions(self, wi):
-        import numpy as np
-
         return [np.array([0.0, 0.0, 1.0])]
 
     def _f(self, ops, wi, wo, p):

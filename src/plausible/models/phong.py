@@ -21,6 +21,8 @@ References
 
 from __future__ import annotations
 
+import numpy as np
+
 from .. import vec, warps
 from ..bxdf import BxDF, above
 from ..ops import INV_PI, PI
@@ -102,8 +104,6 @@ class ModifiedPhong(BxDF):
     )
 
     def _validate(self):
-        import numpy as np
-
         total = np.asarray(self.params["kd"]) + np.asarray(self.params["ks"])
         if np.any(total > 1.0 + 1e-12):
             raise ValueError("ModifiedPhong: parameters 'kd' + 'ks' must not exceed 1 "

@@ -119,7 +119,9 @@ def _source_hash(cls) -> str:
 
 
 def albedo_table_of(model, progress=None):
-    """The (cached) albedo table of ``model``: memory first, then disk, else integrated."""
+    """The (cached) albedo table of ``model``: memory first, then disk, else integrated
+    (reported to ``progress``, a :mod:`plausible.progress` factory; with None, to the
+    ambient reporter: the command line's bar)."""
     from ..analysis import albedo_table
     from ..tables import AngleTable
 
@@ -183,6 +185,8 @@ class PumpedUp(BxDF):
     )
 
     def __init__(self, progress=None, **params):
+        """``progress``: a :mod:`plausible.progress` factory reporting the albedo
+        tables built here (none when cached); None: the ambient reporter."""
         super().__init__(**params)
         base = self.params["base"]
         self.base = base

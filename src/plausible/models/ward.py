@@ -26,6 +26,8 @@ trigonometry.  They differ in the factor in front of ``rs E(h)``:
 
 from __future__ import annotations
 
+import numpy as np
+
 from .. import vec, warps
 from ..bxdf import BxDF, above
 from ..ops import INV_PI, PI
@@ -116,5 +118,4 @@ class Ward(BxDF):
         return warps.mixture(ops, u[0] < ps, spec, diff)
 
     def peak_directions(self, wi):
-        import numpy as np
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]

@@ -1,0 +1,58 @@
+"""Values as text and as JSON: the one home of the small formatters.
+
+* :func:`fmt` -- a parameter value (number, colour, choice, nested model) as
+  text; the model ``repr`` (also the pumped-up table cache key), the command
+  line's tables, fit summaries and the figures report use it with their own
+  number format and separators.
+* :func:`jsonable` -- plain JSON data from results holding NumPy arrays and
+  scalars (non-finite numbers become the strings ``"inf"``, ``"nan"``, which
+  strict JSON readers accept).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def fmt(v, spec: str = "g", *, sep: str = ", ", brackets: bool = True, other=str,
+        sequences: tuple = (np.ndarray,)) -> str:
+    """``v`` as text: floats with the format ``spec``; an instance of ``sequences``
+    (default: NumPy arrays) element by element, joined by ``sep`` (inside
+    ``[...]`` if ``brackets``); anything else with ``other`` (``str`` or ``repr``).
+
+    >>> fmt(np.array([0.5, 1.0]))
+    '[0.5, 1]'
+    >>> fmt((0.5, 1.0), sep=",", brackets=False, sequences=(tuple,))
+    '0.5,1'
+    >>> fmt("max", other=repr)
+    "'max'"
+    """
+    if isinstance(v, sequences):
+        items = v.ravel().tolist() if isinstance(v, np.ndarray) else list(v)
+        body = sep.join(f"{x:{spec}}" if isinstance(x, float) else str(x) for x in items)
+        return f"[{body}]" if brackets else body
+    return f"{v:{spec}}" if isinstance(v, float) else other(v)
+
+
+def jsonable(x):
+    """``x`` with NumPy arrays and scalars turned into lists and Python numbers,
+    recursively through dicts, lists and tuples; non-finite floats as strings."""
+    if isinstance(x, dict):
+        return {k: jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return jsonable(x.tolist())
+    if isinstance(x, (np.floating, float)):
+        v = float(x)
+        return v if math.isfinite(v) else str(v)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+__all__ = ["fmt", "jsonable"]
