@@ -8,6 +8,7 @@ import sys
 import click
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
@@ -123,27 +124,52 @@ def check(model, params, as_json, all_models, quick):
 
     Exits with status 1 when a property fails.
     """
+    from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
     if not model and not all_models:
         _fail("give a MODEL or --all")
+    if all_models and (model or params):
+        _fail(f"--all checks every registered model on its own parameter sets; it takes no MODEL or -p "
+              f"(got {' '.join([model or ''] + ['-p ' + p for p in params]).strip()!r})")
     if all_models:
         targets = [m for name in registry.names() for m in model_variants(name)]
     else:
         targets = [_model(model, params)]
-    reports = []
+    reports, verdicts = [], []
     for m in targets:
-        rep = run_check(m, quick=quick, progress=_Bar(f"check {m.name}", not as_json))
-        reports.append(rep)
+        try:
+            rep = run_check(m, quick=quick, progress=_Bar(f"check {m.name}", not as_json))
+        except Exception as e:   # noqa: BLE001  one model's failure is reported, the others still run
+            if not all_models:
+                raise
+            reports.append(dict(CheckReport(m.name, m.params).to_dict(), passed=False,
+                                error=f"{type(e).__name__}: {e}"))
+            verdicts.append(False)
+            if not as_json:
+                console.print(f"[red]check {escape(repr(m))} failed with an error:[/red] "
+                              f"{escape(reports[-1]['error'])}")
+            continue
+        reports.append(rep.to_dict())
+        verdicts.append(rep.as_claimed(m.info) if all_models else rep.passed)
         if not as_json:
             _print_report(rep)
     if as_json:
         import json
 
-        click.echo(json.dumps([r.to_dict() for r in reports] if all_models else reports[0].to_dict(), indent=1))
+        click.echo(json.dumps(reports if all_models else reports[0], indent=1))
     if all_models:   # the implausible baselines may fail what they do not claim
-        sys.exit(0 if all(r.as_claimed(m.info) for r, m in zip(reports, targets)) else 1)
-    sys.exit(0 if reports[0].passed else 1)
+        errors = sum("error" in r for r in reports)
+        if not as_json:
+            bad = [f"{r['model']} {_fmt_params(r['params'])}" for r, v in zip(reports, verdicts) if not v]
+            click.echo(f"{len(reports)} parameter sets of {len(registry.names())} models checked: "
+                       f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
+                       f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
+    sys.exit(0 if all(verdicts) else 1)
+
+
+def _fmt_params(ps):
+    return "{" + ", ".join(f"{k}={_fmt(v)}" for k, v in ps.items()) + "}"
 
 
 def _print_report(rep):

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..bxdf import BxDF
 from .albedo import albedo, direction, is_isotropic, pdf_integral
 
 #: Incidence angles (degrees) of the default energy grid: dense toward grazing.
@@ -49,7 +50,11 @@ def _jsonable(x):
         return int(x)
     if isinstance(x, np.bool_):
         return bool(x)
-    return x
+    if x is None or isinstance(x, (str, int, bool)):
+        return x
+    from ..registry import spec_of   # a nested model (pumped-up's base) -> its spec string
+
+    return spec_of(x) if isinstance(x, BxDF) else str(x)
 
 
 def stratified_directions(n_theta: int, n_phi: int, rng, grazing: bool = True) -> np.ndarray:

@@ -170,7 +170,10 @@ def _jsonable(o):
         return o.tolist()
     if isinstance(o, (np.floating, np.integer)):
         return o.item()
-    return str(o)
+    from ..bxdf import BxDF
+    from ..registry import spec_of   # a nested model (pumped-up's base) -> its spec string
+
+    return spec_of(o) if isinstance(o, BxDF) else str(o)
 
 
 def run(out, **kw):
