@@ -34,8 +34,10 @@ def _angles(text, what):
         t, p = (float(x) for x in text.split(","))
     except ValueError:
         _fail(f"{what} must be THETA_DEG,PHI_DEG (e.g. 30,0), got {text!r}")
-    if not (0 <= t <= 180) or not math.isfinite(p):
+    if not (0 <= t <= 180):
         _fail(f"{what}: theta must lie in [0, 180] degrees, got {t}")
+    if not math.isfinite(p):
+        _fail(f"{what}: phi must be a finite angle in degrees, got {p}")
     return direction(math.radians(t), math.radians(p))
 
 
@@ -90,7 +92,7 @@ def models():
         if not inf.energy_conserving:
             flags.append("not energy conserving")
         desc = inf.description + (f" [{'; '.join(flags)}]" if flags else "")
-        t.add_row(name, ps, desc)
+        t.add_row(escape(name), escape(ps), escape(desc))   # text, not Rich markup: "[max]" stays
     console.print(t)
 
 
@@ -173,12 +175,12 @@ def _fmt_params(ps):
 
 
 def _print_report(rep):
-    t = Table(title=f"{rep.model} {rep.params}", title_justify="left")
+    t = Table(title=escape(f"{rep.model} {rep.params}"), title_justify="left")
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
         style = "green" if row[3] == "PASS" else "red"
-        t.add_row(*row[:3], f"[{style}]{row[3]}[/{style}]", row[4])
+        t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)
 
 
@@ -186,16 +188,23 @@ def _print_report(rep):
 @click.argument("models", nargs=-1, required=True)
 @PARAM_OPT
 @click.option("--plot", type=click.Path(dir_okay=False), help="Write the curves to this image file.")
-@click.option("--phi", default=0.0, show_default=True, help="Azimuth of incidence (degrees).")
-@click.option("-n", "--points", default=46, show_default=True, help="Number of incidence angles.")
+@click.option("--phi", default=0.0, show_default=True, callback=lambda c, p, v: _finite(p, v),
+              help="Azimuth of incidence (degrees).")
+@click.option("-n", "--points", default=46, show_default=True, type=click.IntRange(1, 100_000),
+              help="Number of incidence angles.")
 def albedo(models, params, plot, phi, points):
     """Directional albedo against incidence angle, for one or more models.
 
     MODELS are names with optional parameters, e.g. reciprocal-phong:n=150
     ashikhmin-shirley:nu=10:nv=10:rs=1:rd=0 (-p applies to every model).
     """
-    from .plotting import default_thetas, plot_albedo_curves
+    from .plotting import check_image_path, default_thetas, plot_albedo_curves
 
+    if plot:    # before the work: a path that cannot be written fails now, not after it
+        try:
+            check_image_path(plot, "--plot")
+        except ValueError as e:
+            _fail(str(e))
     th = default_thetas(points)
     targets = [_model(spec, params) for spec in models]
     tick = _Bar("albedo")(len(targets) * len(th))
@@ -203,13 +212,19 @@ def albedo(models, params, plot, phi, points):
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
     for label, _, _ in curves:
-        t.add_column(label, overflow="fold")
+        t.add_column(escape(label), overflow="fold")
     for i, x in enumerate(th):
         t.add_row(f"{math.degrees(x):.2f}", *[_fmt_alb(r.value[i], r.error[i]) for _, _, r in curves])
     console.print(t)
     if plot:
         plot_albedo_curves(curves, plot)
-        console.print(f"wrote {plot}")
+        console.print(f"wrote {escape(str(plot))}")
+
+
+def _finite(param, v):
+    if not math.isfinite(v):
+        raise click.BadParameter(f"must be a finite number, got {v}", param=param)
+    return v
 
 
 def _fmt_alb(v, e):
@@ -234,18 +249,21 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
     from .fitting import fit as run_fit
     from .fitting.plots import write_plots
+    from .plotting import check_writable_dir
 
     try:
+        if out:     # before the fit: a folder that cannot be written fails now, not after it
+            check_writable_dir(out, "--out", create=True)
         res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
                       seed=seed, time_limit=time_limit, progress=_Bar(f"fit {model}"))
     except ValueError as e:
         _fail(str(e))
-    console.print(f"[bold]{res.model.name}[/bold] fitted to {res.target.label} ({metric}, "
+    console.print(f"[bold]{escape(res.model.name)}[/bold] fitted to {escape(res.target.label)} ({metric}, "
                   f"{res.evaluations} evaluations, {res.seconds:.1f} s)")
     t = Table()
     t.add_column("parameter"); t.add_column("value")
     for k, v in res.params.items():
-        t.add_row(k, _fmt(v.tolist() if isinstance(v, np.ndarray) else v))
+        t.add_row(escape(k), escape(_fmt(v.tolist() if isinstance(v, np.ndarray) else v)))
     console.print(t)
     e = Table()
     e.add_column("error (every metric)"); e.add_column("value")
@@ -256,7 +274,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
     if out:
         for p in write_plots(res, out):
-            console.print(f"wrote {p}")
+            console.print(f"wrote {escape(str(p))}")
 
 
 @main.command()
@@ -276,12 +294,23 @@ def figures(out, only, spp, resolution, quick, force, list_only):
         for n in F.names():
             click.echo(f"{n:28s} {F.get(n).title}")
         return
-    try:
-        res = F.run(out, only=list(only) or None, spp=spp, resolution=resolution, quick=quick, force=force,
+    from .plotting import check_writable_dir
+
+    try:    # unknown names and an unwritable folder fail before anything is made
+        only = list(dict.fromkeys(F.get(n).name for n in only))
+        check_writable_dir(out, "--out", create=True)
+        res = F.run(out, only=only or None, spp=spp, resolution=resolution, quick=quick, force=force,
                     console=console)
     except ValueError as e:
         _fail(str(e))
-    sys.exit(0 if all(m["status"] == "ok" for m in res.values()) else 1)
+    failed = [n for n, m in res.items() if m["status"] != "ok"]
+    red = [f"{n}: {x['quantity']}" for n, m in res.items() for x in m.get("measurements", [])
+           if x.get("ok") is False]
+    if failed:
+        click.echo(f"figures that failed: {', '.join(failed)}", err=True)
+    if red:
+        click.echo(f"measured checks that do not hold ({len(red)}): {'; '.join(red)}", err=True)
+    sys.exit(1 if failed or red else 0)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -73,6 +73,9 @@ def parse_assignments(items) -> dict:
         if "=" not in it:
             raise ValueError(f"parameter assignment {it!r} must look like name=value")
         k, v = it.split("=", 1)
+        if not k.strip():
+            raise ValueError(f"parameter assignment {it!r} has no name before '=' (write name=value, "
+                             f"e.g. n=20)")
         out[k.strip()] = parse_value(v)
     return out
 
