@@ -86,3 +86,80 @@ def test_check_all_refuses_a_model_or_parameters():
     assert r.exit_code == 2 and "--all" in r.output and "takes no MODEL or -p" in r.output
     r = run("check", "--all", "-p", "n=5")
     assert r.exit_code == 2 and "-p n=5" in r.output
+
+
+# -- albedo ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("n", ["-3", "0"])
+def test_albedo_needs_at_least_one_angle(n):
+    r = run("albedo", "lambertian", "-n", n)
+    assert r.exit_code == 2 and "--points" in r.output and f"{n} is not in the range 1<=x<=100000" in r.output
+
+
+@pytest.mark.parametrize("phi", ["nan", "inf"])
+def test_albedo_phi_must_be_finite(phi):
+    r = run("albedo", "lambertian", "-n", "2", "--phi", phi)
+    assert r.exit_code == 2 and "--phi" in r.output and f"must be a finite number, got {phi}" in r.output
+
+
+def test_albedo_plot_path_checked_before_the_work(tmp_path, monkeypatch):
+    import plausible.cli as cli
+
+    monkeypatch.setattr(cli, "albedo_curve", lambda *a, **k: pytest.fail("computed before checking --plot"))
+    r = run("albedo", "lambertian", "--plot", "/nonexistent/dir/x.png")
+    assert r.exit_code == 2 and "--plot: folder '/nonexistent/dir' does not exist" in r.output
+    r = run("albedo", "lambertian", "--plot", str(tmp_path / "x.unknownext"))
+    assert r.exit_code == 2 and "unknown image type '.unknownext'; use one of" in r.output and ".png" in r.output
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    r = run("albedo", "lambertian", "--plot", str(blocker / "x.png"))
+    assert r.exit_code == 2 and "does not exist" in r.output
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "geteuid") or __import__("os").geteuid() == 0,
+                    reason="root writes into read-only folders")
+def test_albedo_plot_into_a_read_only_folder(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir(mode=0o555)
+    r = run("albedo", "lambertian", "-n", "2", "--plot", str(ro / "x.png"))
+    assert r.exit_code == 2 and "--plot: cannot write into" in r.output and "Permission denied" in r.output
+
+
+def test_albedo_plot_into_an_unwritable_folder_is_refused(tmp_path, monkeypatch):
+    """The same as root: a folder that takes no new file (simulated by the OS error)."""
+    import tempfile
+
+    def refuse(*a, **k):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "TemporaryFile", refuse)
+    r = run("albedo", "lambertian", "-n", "2", "--plot", str(tmp_path / "x.png"))
+    assert r.exit_code == 2 and "--plot: cannot write into" in r.output and "(Permission denied)" in r.output
+    assert "Traceback" not in r.output
+
+
+# -- eval and -p ----------------------------------------------------------------------
+
+def test_eval_non_finite_phi_blames_phi():
+    r = run("eval", "lambertian", "--wi", "30,nan", "--wo", "0,0")
+    assert r.exit_code == 2 and "--wi: phi must be a finite angle in degrees, got nan" in r.output
+    r = run("eval", "lambertian", "--wi", "nan,0", "--wo", "0,0")
+    assert r.exit_code == 2 and "--wi: theta must lie in [0, 180] degrees, got nan" in r.output
+
+
+def test_parameter_without_a_name():
+    r = run("eval", "lambertian", "-p", "=3", "--wi", "0,0", "--wo", "0,0")
+    assert r.exit_code == 2 and "parameter assignment '=3' has no name before '='" in r.output
+
+
+# -- text is printed as text, not Rich markup ------------------------------------------
+
+def test_models_keeps_bracketed_text(monkeypatch):
+    import plausible.cli as cli
+    from rich.console import Console
+
+    monkeypatch.setattr(cli, "console", Console(width=2000))    # one line per table row
+    r = run("models")
+    assert r.exit_code == 0
+    for text in ("[not reciprocal; not energy conserving]", "[max]", "[controlled]"):
+        assert text in r.output, text
