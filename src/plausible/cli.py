@@ -124,7 +124,10 @@ def eval_cmd(model, params, wi, wo):
 def check(model, params, as_json, all_models, quick):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
-    Exits with status 1 when a property fails.
+    Exits with status 1 when a property fails.  With --all: every registered
+    model on its defaults and extremes, a model whose check raises is reported
+    and the others still run, a summary line ends the output, and the status
+    is 1 when a model fails a property it claims.
     """
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
@@ -255,7 +258,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
         if out:     # before the fit: a folder that cannot be written fails now, not after it
             check_writable_dir(out, "--out", create=True)
         res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
-                      seed=seed, time_limit=time_limit, progress=_Bar(f"fit {model}"))
+                      seed=seed, time_limit=time_limit, progress=_Bar(escape(f"fit {model}")))
     except ValueError as e:
         _fail(str(e))
     console.print(f"[bold]{escape(res.model.name)}[/bold] fitted to {escape(res.target.label)} ({metric}, "
@@ -287,7 +290,10 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.option("--force", is_flag=True, help="Remake figures even when their inputs have not changed.")
 @click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")
 def figures(out, only, spp, resolution, quick, force, list_only):
-    """Reproduce the papers' figures as a browsable report (OUT/index.html)."""
+    """Reproduce the papers' figures as a browsable report (OUT/index.html).
+
+    Exits with status 1 when a figure fails or a measured check does not hold.
+    """
     from . import figures as F
 
     if list_only:
