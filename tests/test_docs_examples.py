@@ -101,7 +101,8 @@ def test_documented_python(code, in_repo_copy):
         if label.endswith("samples.csv"):
             assert res.params["kd"] == pytest.approx(0.3, rel=0.02) and res.params["ks"] == pytest.approx(0.5, rel=0.02)
         if label.endswith("paint.binary"):   # Ward fitted to its own MERL table (nearest-cell lookup)
-            assert res.params["alpha_x"] == pytest.approx(0.2, rel=0.1) and res.params["rs"] == pytest.approx(0.2, rel=0.1)
+            assert res.params["alpha_x"] == pytest.approx(0.2, rel=0.1)
+            assert res.params["rs"] == pytest.approx(0.2, rel=0.1)
     if "img" in ns:                      # the scene renders: finite, non-negative, not blank
         img = np.asarray(ns["img"])
         assert img.shape == (64, 64, 3) and np.all(np.isfinite(img)) and img.min() >= 0 and img.std() > 0.01
