@@ -36,8 +36,10 @@ def _angles(text, what):
         t, p = (float(x) for x in text.split(","))
     except ValueError:
         _fail(f"{what} must be THETA_DEG,PHI_DEG (e.g. 30,0), got {text!r}")
-    if not (0 <= t <= 180) or not math.isfinite(p):
+    if not (0 <= t <= 180):
         _fail(f"{what}: theta must lie in [0, 180] degrees, got {t}")
+    if not math.isfinite(p):
+        _fail(f"{what}: phi must be a finite angle in degrees, got {p}")
     return direction(math.radians(t), math.radians(p))
 
 
@@ -128,7 +130,7 @@ def models():
         if not inf.energy_conserving:
             flags.append("not energy conserving")
         desc = inf.description + (f" [{'; '.join(flags)}]" if flags else "")
-        t.add_row(name, ps, desc)
+        t.add_row(escape(name), escape(ps), escape(desc))   # text, not Rich markup: "[max]" stays
     console.print(t)
 
 
@@ -158,38 +160,66 @@ def eval_cmd(model, params, wi, wo):
 def check(model, params, as_json, all_models, quick):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
-    Exits with status 1 when a property fails.
+    Exits with status 1 when a property fails.  With --all: every registered
+    model on its defaults and extremes, a model whose check raises is reported
+    and the others still run, a summary line ends the output, and the status
+    is 1 when a model fails a property it claims.
     """
+    from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
     if not model and not all_models:
         _fail("give a MODEL or --all")
+    if all_models and (model or params):
+        _fail(f"--all checks every registered model on its own parameter sets; it takes no MODEL or -p "
+              f"(got {' '.join([model or ''] + ['-p ' + p for p in params]).strip()!r})")
     if all_models:
         targets = [m for name in registry.names() for m in model_variants(name)]
     else:
         targets = [_model(model, params)]
-    reports = []
+    reports, verdicts = [], []
     for m in targets:
-        rep = run_check(m, quick=quick, progress=silent if as_json else _bar())
-        reports.append(rep)
+        try:
+            rep = run_check(m, quick=quick, progress=silent if as_json else _bar())
+        except Exception as e:   # noqa: BLE001  one model's failure is reported, the others still run
+            if not all_models:
+                raise
+            reports.append(dict(CheckReport(m.name, m.params).to_dict(), passed=False,
+                                error=f"{type(e).__name__}: {e}"))
+            verdicts.append(False)
+            if not as_json:
+                console.print(f"[red]check {escape(repr(m))} failed with an error:[/red] "
+                              f"{escape(reports[-1]['error'])}")
+            continue
+        reports.append(rep.to_dict())
+        verdicts.append(rep.as_claimed(m.info) if all_models else rep.passed)
         if not as_json:
             _print_report(rep)
     if as_json:
         import json
 
-        click.echo(json.dumps([r.to_dict() for r in reports] if all_models else reports[0].to_dict(), indent=1))
+        click.echo(json.dumps(reports if all_models else reports[0], indent=1))
     if all_models:   # the implausible baselines may fail what they do not claim
-        sys.exit(0 if all(r.as_claimed(m.info) for r, m in zip(reports, targets)) else 1)
-    sys.exit(0 if reports[0].passed else 1)
+        errors = sum("error" in r for r in reports)
+        if not as_json:
+            bad = [f"{r['model']} {_fmt_params(r['params'])}" for r, v in zip(reports, verdicts) if not v]
+            click.echo(f"{len(reports)} parameter sets of {len(registry.names())} models checked: "
+                       f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
+                       f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
+    sys.exit(0 if all(verdicts) else 1)
+
+
+def _fmt_params(ps):
+    return "{" + ", ".join(f"{k}={_fmt(v)}" for k, v in ps.items()) + "}"
 
 
 def _print_report(rep):
-    t = Table(title=f"{rep.model} {rep.params}", title_justify="left")
+    t = Table(title=escape(f"{rep.model} {rep.params}"), title_justify="left")
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
         style = "green" if row[3] == "PASS" else "red"
-        t.add_row(*row[:3], f"[{style}]{row[3]}[/{style}]", row[4])
+        t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)
 
 
@@ -197,16 +227,23 @@ def _print_report(rep):
 @click.argument("models", nargs=-1, required=True)
 @PARAM_OPT
 @click.option("--plot", type=click.Path(dir_okay=False), help="Write the curves to this image file.")
-@click.option("--phi", default=0.0, show_default=True, help="Azimuth of incidence (degrees).")
-@click.option("-n", "--points", default=46, show_default=True, help="Number of incidence angles.")
+@click.option("--phi", default=0.0, show_default=True, callback=lambda c, p, v: _finite(p, v),
+              help="Azimuth of incidence (degrees).")
+@click.option("-n", "--points", default=46, show_default=True, type=click.IntRange(1, 100_000),
+              help="Number of incidence angles.")
 def albedo(models, params, plot, phi, points):
     """Directional albedo against incidence angle, for one or more models.
 
     MODELS are names with optional parameters, e.g. reciprocal-phong:n=150
     ashikhmin-shirley:nu=10:nv=10:rs=1:rd=0 (-p applies to every model).
     """
-    from .plotting import default_thetas, plot_albedo_curves
+    from .plotting import check_image_path, default_thetas, plot_albedo_curves
 
+    if plot:    # before the work: a path that cannot be written fails now, not after it
+        try:
+            check_image_path(plot, "--plot")
+        except ValueError as e:
+            _fail(str(e))
     th = default_thetas(points)
     targets = [_model(spec, params) for spec in models]
     tick = _bar()(len(targets) * len(th), "albedo")
@@ -214,13 +251,19 @@ def albedo(models, params, plot, phi, points):
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
     for label, _, _ in curves:
-        t.add_column(label, overflow="fold")
+        t.add_column(escape(label), overflow="fold")
     for i, x in enumerate(th):
         t.add_row(f"{math.degrees(x):.2f}", *[_fmt_alb(r.value[i], r.error[i]) for _, _, r in curves])
     console.print(t)
     if plot:
         plot_albedo_curves(curves, plot)
-        console.print(f"wrote {plot}")
+        console.print(f"wrote {escape(str(plot))}")
+
+
+def _finite(param, v):
+    if not math.isfinite(v):
+        raise click.BadParameter(f"must be a finite number, got {v}", param=param)
+    return v
 
 
 def _fmt_alb(v, e):
@@ -245,18 +288,21 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
     from .fitting import fit as run_fit
     from .fitting.plots import write_plots
+    from .plotting import check_writable_dir
 
     try:
+        if out:     # before the fit: a folder that cannot be written fails now, not after it
+            check_writable_dir(out, "--out", create=True)
         res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
                       seed=seed, time_limit=time_limit, progress=_bar())
     except ValueError as e:
         _fail(str(e))
-    console.print(f"[bold]{res.model.name}[/bold] fitted to {res.target.label} ({metric}, "
+    console.print(f"[bold]{escape(res.model.name)}[/bold] fitted to {escape(res.target.label)} ({metric}, "
                   f"{res.evaluations} evaluations, {res.seconds:.1f} s)")
     t = Table()
     t.add_column("parameter"); t.add_column("value")
     for k, v in res.params.items():
-        t.add_row(k, _fmt(v))
+        t.add_row(escape(k), escape(_fmt(v)))
     console.print(t)
     e = Table()
     e.add_column("error (every metric)"); e.add_column("value")
@@ -267,7 +313,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
     if out:
         for p in write_plots(res, out):
-            console.print(f"wrote {p}")
+            console.print(f"wrote {escape(str(p))}")
 
 
 @main.command()
@@ -280,19 +326,33 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.option("--force", is_flag=True, help="Remake figures even when their inputs have not changed.")
 @click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")
 def figures(out, only, spp, resolution, quick, force, list_only):
-    """Reproduce the papers' figures as a browsable report (OUT/index.html)."""
+    """Reproduce the papers' figures as a browsable report (OUT/index.html).
+
+    Exits with status 1 when a figure fails or a measured check does not hold.
+    """
     from . import figures as F
 
     if list_only:
         for n in F.names():
             click.echo(f"{n:28s} {F.get(n).title}")
         return
-    try:
-        res = F.run(out, only=list(only) or None, spp=spp, resolution=resolution, quick=quick, force=force,
+    from .plotting import check_writable_dir
+
+    try:    # unknown names and an unwritable folder fail before anything is made
+        only = list(dict.fromkeys(F.get(n).name for n in only))
+        check_writable_dir(out, "--out", create=True)
+        res = F.run(out, only=only or None, spp=spp, resolution=resolution, quick=quick, force=force,
                     console=console, progress=_bar())
     except ValueError as e:
         _fail(str(e))
-    sys.exit(0 if all(m["status"] == "ok" for m in res.values()) else 1)
+    failed = [n for n, m in res.items() if m["status"] != "ok"]
+    red = [f"{n}: {x['quantity']}" for n, m in res.items() for x in m.get("measurements", [])
+           if x.get("ok") is False]
+    if failed:
+        click.echo(f"figures that failed: {', '.join(failed)}", err=True)
+    if red:
+        click.echo(f"measured checks that do not hold ({len(red)}): {'; '.join(red)}", err=True)
+    sys.exit(1 if failed or red else 0)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -73,6 +73,9 @@ def parse_assignments(items) -> dict:
         if "=" not in it:
             raise ValueError(f"parameter assignment {it!r} must look like name=value")
         k, v = it.split("=", 1)
+        if not k.strip():
+            raise ValueError(f"parameter assignment {it!r} has no name before '=' (write name=value, "
+                             f"e.g. n=20)")
         out[k.strip()] = parse_value(v)
     return out
 
@@ -102,6 +105,35 @@ def split_spec(spec: str) -> list[str]:
         raise ValueError(f"unbalanced '[' in model spec {spec!r}")
     parts.append(cur)
     return parts
+
+
+def spec_of(model) -> str:
+    """The spec string of a model, ``"name:k=v:..."``, that :func:`make_from_spec`
+    reads back into an equal model: floats exactly (``repr``), colours as
+    ``r,g,b``, groups of tuples as ``a,b;c,d;``, a nested model in square
+    brackets.  A model outside the registry gives its ``repr``.
+
+    >>> spec_of(make("pumped-up"))
+    'pumped-up:base=[reciprocal-phong:ks=1.0:n=20.0]:correction=max:times=1:fresnel=none:rs=1.0:eta=0.2:k=3.0'
+    """
+    inf = getattr(model, "info", None)
+    if inf is None or _REGISTRY.get(inf.name) is not inf:
+        return repr(model)
+    return ":".join([inf.name] + [f"{k}={_spec_value(v)}" for k, v in model.params.items()])
+
+
+def _spec_value(v) -> str:
+    if hasattr(v, "params") and hasattr(v, "eval"):      # a nested model
+        return f"[{spec_of(v)}]"
+    if hasattr(v, "tolist"):
+        v = v.tolist()
+    if isinstance(v, (list, tuple)):
+        if any(isinstance(x, (list, tuple)) or hasattr(x, "tolist") for x in v):
+            return "".join(_spec_value(x) + ";" for x in v)
+        return ",".join(_spec_value(x) for x in v)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return str(v)
+    return repr(float(v)) if isinstance(v, float) else str(v)
 
 
 def make_from_spec(spec: str, **extra):

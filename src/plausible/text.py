@@ -38,7 +38,8 @@ def fmt(v, spec: str = "g", *, sep: str = ", ", brackets: bool = True, other=str
 
 def jsonable(x):
     """``x`` with NumPy arrays and scalars turned into lists and Python numbers,
-    recursively through dicts, lists and tuples; non-finite floats as strings."""
+    recursively through dicts, lists and tuples; non-finite floats as strings; a
+    model (e.g. pumped-up's base) as its spec string (:func:`plausible.registry.spec_of`)."""
     if isinstance(x, dict):
         return {k: jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
@@ -52,6 +53,10 @@ def jsonable(x):
         return int(x)
     if isinstance(x, np.bool_):
         return bool(x)
+    if hasattr(x, "params") and hasattr(x, "eval"):     # a nested model (pumped-up's base)
+        from .registry import spec_of       # import here: registry sits above this module
+
+        return spec_of(x)
     return x
 
 

@@ -4,6 +4,13 @@ Cache: each figure's directory ``OUT/NAME/`` holds ``figure.json`` with the hash
 of its inputs (figure name, parameters, resolution, spp, quick mode, and the
 source of the plausible package except the CLI and this runner).  A figure
 whose hash and files are unchanged is not made again.
+
+A figure is made in a temporary folder ``OUT/.NAME.partial-*`` and put in place
+of ``OUT/NAME/`` by renaming it only when it is complete, so ``OUT/NAME/`` always
+holds the files of one run, the run its ``figure.json`` describes: a run
+interrupted (Ctrl-C) or killed while it remakes a figure leaves the previous
+one as it was, and the cache never claims files of another run.  On any exit,
+Ctrl-C included, ``index.html`` is written for the figures made so far.
 """
 
 from __future__ import annotations
@@ -11,11 +18,15 @@ from __future__ import annotations
 import hashlib
 import html
 import json
+import os
+import shutil
+import tempfile
 import time
 import traceback
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 
 from ..progress import start
 from ..text import fmt
@@ -62,6 +73,37 @@ def _cached(d: Path, key: str):
     return m if all((d / f).exists() for f in files) else None
 
 
+def _remove_partial(out: Path, name: str):
+    for p in list(out.glob(f".{name}.partial-*")) + list(out.glob(f".{name}.old-*")):
+        shutil.rmtree(p, ignore_errors=True)
+
+
+def _replace(tmp: Path, d: Path):
+    """Put the finished figure folder ``tmp`` in place of ``d`` (renames only; the
+    old folder is moved aside first, since a rename cannot replace a non-empty one)."""
+    old = None
+    if d.exists():
+        old = d.with_name(f".{d.name}.old-{os.getpid()}")
+        d.rename(old)
+    tmp.rename(d)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _index_all(out: Path, results: dict) -> Path:
+    """``index.html`` of every figure present in ``out``, not only this run's."""
+    allm = {}
+    for n in names():
+        if n in results:
+            allm[n] = results[n]
+        elif (out / n / "figure.json").exists():
+            try:
+                allm[n] = json.loads((out / n / "figure.json").read_text())
+            except ValueError:
+                pass
+    return write_index(out, allm)
+
+
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
         progress=None) -> dict:
     """Make the figures (all, or the names in ``only``) into ``out`` and write
@@ -77,56 +119,59 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     console = console or Console()
-    todo = names() if not only else [get(n).name for n in only]
+    todo = names() if not only else list(dict.fromkeys(get(n).name for n in only))
     src = source_hash()
     results = {}
     t_all = time.time()
-    for name in todo:
-        fig = FIGURES[name]
-        d = out / name
-        key = input_key(fig, resolution=resolution, spp=spp, quick=quick, src=src)
-        m = None if force else _cached(d, key)
-        if m is not None:
-            m["cached"] = True
-            console.print(f"{name:<22} cached")
-            results[name] = m
-            continue
-        ctx = Context(d, resolution=resolution, spp=spp, quick=quick,
-                      progress=lambda total, label="", _n=name: start(progress, total, _n))
-        t0 = time.time()
-        m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
-                 key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick)
-        try:
-            fig.fn(ctx, **fig.params)
-            m["status"] = "ok"
-        except Exception:   # a failing figure is reported, the others still run
-            m["status"] = "failed"
-            m["error"] = traceback.format_exc()
-            console.print(f"[red]figure {name} failed:[/red]\n{m['error']}")
-        ctx.finish()
-        m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
-                 seconds=round(time.time() - t0, 1), cached=False)
-        (d / "figure.json").write_text(json.dumps(m, indent=1))
-        console.print(f"{name:<22} {m['status']} {m['seconds']} s")
-        results[name] = m
-    # the index lists every figure present in out/, not only this run's
-    allm = {}
-    for n in names():
-        if n in results:
-            allm[n] = results[n]
-        elif (out / n / "figure.json").exists():
+    tmp, name = None, ""
+    try:
+        for name in todo:
+            fig = FIGURES[name]
+            d = out / name
+            key = input_key(fig, resolution=resolution, spp=spp, quick=quick, src=src)
+            m = None if force else _cached(d, key)
+            if m is not None:
+                m["cached"] = True
+                console.print(f"{escape(name):<22} cached")
+                results[name] = m
+                continue
+            _remove_partial(out, name)      # left by a run that was killed
+            tmp = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out))
+            ctx = Context(tmp, resolution=resolution, spp=spp, quick=quick,
+                          progress=lambda total, label="", _n=name: start(progress, total, _n))
+            t0 = time.time()
+            m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
+                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick)
             try:
-                allm[n] = json.loads((out / n / "figure.json").read_text())
-            except ValueError:
-                pass
-    write_index(out, allm)
+                fig.fn(ctx, **fig.params)
+                m["status"] = "ok"
+            except Exception:   # a failing figure is reported, the others still run
+                m["status"] = "failed"
+                m["error"] = traceback.format_exc()
+                console.print(f"[red]figure {escape(name)} failed:[/red]\n{escape(m['error'])}")
+            ctx.finish()
+            m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
+                     seconds=round(time.time() - t0, 1), cached=False)
+            (tmp / "figure.json").write_text(json.dumps(m, indent=1))
+            _replace(tmp, d)
+            tmp = None
+            console.print(f"{escape(name):<22} {m['status']} {m['seconds']} s")
+            results[name] = m
+    except KeyboardInterrupt:
+        console.print(f"[yellow]interrupted while making {escape(name)}: it is left as it was before "
+                      f"this run; {len(results)} figures done -> {escape(str(out / 'index.html'))}[/yellow]")
+        raise
+    finally:    # on any exit: drop the unfinished figure, index what is done
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        _index_all(out, results)
     total = round(time.time() - t_all, 1)
     failed = [n for n, m in results.items() if m["status"] != "ok"]
     checks = [x for m in results.values() for x in m.get("measurements", []) if "ok" in x]
     bad = [x for x in checks if not x["ok"]]
     console.print(f"{len(results)} figures ({sum(m.get('cached', False) for m in results.values())} cached, "
                   f"{len(failed)} failed) in {total} s; {len(checks) - len(bad)}/{len(checks)} measured "
-                  f"checks hold -> {out / 'index.html'}")
+                  f"checks hold -> {escape(str(out / 'index.html'))}")
     return results
 
 

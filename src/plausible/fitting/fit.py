@@ -76,27 +76,66 @@ class Target:
 
 def load_table(path):
     """Read a CSV table of samples: columns ``wi_x, wi_y, wi_z, wo_x, wo_y, wo_z,
-    f`` (or ``f_r, f_g, f_b``), ``f`` the BRDF without the cosine; a header line
-    and ``#`` comments are skipped.  Returns ``(wi, wo, f)``."""
-    rows = []
-    with open(path) as fh:
-        for ln, line in enumerate(fh, 1):
-            s = line.split("#", 1)[0].strip()
-            if not s:
-                continue
-            try:
-                rows.append([float(x) for x in s.replace(";", ",").split(",")])
-            except ValueError:
-                if rows:
-                    raise ValueError(f"{path}:{ln}: not a row of numbers: {line.strip()!r}") from None
-                continue  # header
+    f`` (or ``f_r, f_g, f_b``), ``f`` the BRDF without the cosine; one header
+    line and ``#`` comments are skipped.  Returns ``(wi, wo, f)``.
+
+    Every value must be a finite number, ``f >= 0`` and no direction a zero
+    vector; a row that breaks this, a row with a different number of columns
+    than the first, or a file that is not UTF-8 text raises ValueError naming
+    the file and line.
+    """
+    rows, width, header = [], None, False
+    try:
+        with open(path, encoding="utf-8") as fh:
+            for ln, line in enumerate(fh, 1):
+                s = line.split("#", 1)[0].strip()
+                if not s:
+                    continue
+                where = f"{path}:{ln}"
+                try:
+                    row = [float(x) for x in s.replace(";", ",").split(",")]
+                except ValueError:
+                    if rows or header:
+                        raise ValueError(f"{where}: not a row of numbers: {_clip(line.strip())!r}") from None
+                    header = True
+                    continue
+                if width is None:
+                    if len(row) not in (7, 9):
+                        raise ValueError(f"{where}: expected 7 or 9 columns (wi xyz, wo xyz, f or f_r f_g f_b), "
+                                         f"got {len(row)}")
+                    width = len(row)
+                elif len(row) != width:
+                    raise ValueError(f"{where}: {len(row)} columns where the rows above have {width}")
+                _check_row(where, row)
+                rows.append(row)
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a CSV text table (byte {e.start} is not UTF-8; a MERL file starts with "
+                         f"the header 90 90 180)") from None
     if not rows:
         raise ValueError(f"{path}: no samples")
     a = np.array(rows)
-    if a.ndim != 2 or a.shape[1] not in (7, 9):
-        raise ValueError(f"{path}: expected 7 or 9 columns (wi xyz, wo xyz, f or f_r f_g f_b), "
-                         f"got {a.shape[1] if a.ndim == 2 else 'ragged rows'}")
     return a[:, :3], a[:, 3:6], (a[:, 6] if a.shape[1] == 7 else a[:, 6:])
+
+
+_COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
+
+
+def _check_row(where, row):
+    """A table row: finite numbers, non-zero directions, ``f >= 0``."""
+    names = _COLUMNS + (("f",) if len(row) == 7 else ("f_r", "f_g", "f_b"))
+    for name, v in zip(names, row):
+        if not math.isfinite(v):
+            raise ValueError(f"{where}: column {name} must be a finite number, got {v}")
+    for w, name in ((row[:3], "wi"), (row[3:6], "wo")):
+        if not any(w):
+            raise ValueError(f"{where}: {name} is the zero vector (a direction needs a non-zero x, y or z)")
+    for name, v in zip(names[6:], row[6:]):
+        if v < 0:
+            raise ValueError(f"{where}: column {name} (the BRDF value) must be >= 0, got {v:g}")
+
+
+def _clip(text, n=60):
+    return text if len(text) <= n else text[:n] + "..."
 
 
 def save_table(path, wi, wo, f):
@@ -138,6 +177,9 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
         mask = None
         if hasattr(target, "missing"):
             mask = ~target.missing(wi, wo)
+            if not mask.any():
+                raise ValueError(f"{target!r}: no measured value at any of the {mask.size} sample pairs "
+                                 "(every cell they fall in is marked missing)")
             wi, wo, f = wi[mask], wo[mask], f[mask]
         th = np.radians(np.asarray(thetas_deg, float))
         A = albedo_curve(target, th).value
@@ -155,11 +197,21 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
 def _table_target(wi, wo, f, label, target_albedo):
     from ..bxdf import as_directions
 
-    wi, wo = as_directions("wi", wi), as_directions("wo", wo)
+    try:
+        wi, wo = as_directions("wi", wi), as_directions("wo", wo)
+    except ValueError as e:
+        raise ValueError(f"{label}: {e}") from None
     f = np.asarray(f, float)
     if f.shape[0] != wi.shape[0] or wo.shape[0] != wi.shape[0]:
-        raise ValueError("table columns wi, wo, f must have the same number of rows")
+        raise ValueError(f"{label}: table columns wi, wo, f must have the same number of rows")
+    if not np.all(np.isfinite(f)) or np.any(f < 0):
+        bad = np.flatnonzero(~(np.isfinite(f) & (f >= 0)).reshape(len(f), -1).all(axis=1))
+        raise ValueError(f"{label}: the BRDF values f must be finite and >= 0; {bad.size} rows are not "
+                         f"(first: row {bad[0]}, f = {f[bad[0]]})")
     ok = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+    if not ok.any():
+        raise ValueError(f"{label}: no sample has both wi and wo above the horizon (z > 0); "
+                         f"the {len(f)} rows all lie on or below it")
     th = A = None
     if target_albedo is not None:
         th = np.radians(np.asarray(target_albedo[0], float))

@@ -111,6 +111,9 @@ class MerlBRDF(BxDF):
         v = np.asarray(values, dtype=np.float64)
         if v.shape != (3,) + RES:
             raise ValueError(f"MERL values must have shape (3, 90, 90, 180), got {v.shape}")
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"MERL values must be finite (negative marks a missing cell); "
+                             f"{int(np.sum(~np.isfinite(v)))} are NaN or inf")
         self.values = v
         self.source = str(source)
         self.channels = 3
@@ -192,6 +195,14 @@ def read_merl(path) -> MerlBRDF:
     if data.size != 3 * NCELLS:
         raise ValueError(f"{path}: MERL file holds {data.size} values, expected {3 * NCELLS}")
     data = data.reshape((3,) + RES)
+    bad = ~np.isfinite(data)
+    if bad.any():
+        c, ih, id_, ip = (int(i[0]) for i in np.nonzero(bad))
+        raise ValueError(f"{path}: {int(bad.sum())} cells hold NaN or inf (first: {'RGB'[c]} channel, "
+                         f"theta_h index {ih}, theta_d index {id_}, phi_d index {ip}); a cell without a "
+                         "measurement must hold a negative value")
+    if np.all(data < 0):
+        raise ValueError(f"{path}: every cell is marked missing (negative): no measurement to use")
     values = np.where(data < 0, -1.0, data * SCALE[:, None, None, None])
     return MerlBRDF(values, source=str(path))
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis import albedo_curve, direction
+from ..text import jsonable
 from ..plotting import _plt, default_thetas, plot_albedo_curves
 
 PLANE_THETAS_DEG = (0.0, 30.0, 60.0, 75.0)
@@ -77,6 +78,7 @@ def write_plots(result, out_dir, points: int = 24, progress=None) -> list:
                                                                           progress=progress)))
     curves.append((f"fit {result.model!r}", th, albedo_curve(result.model, th, progress=progress)))
     paths.append(Path(plot_albedo_curves(curves, out / "albedo.png", title="Directional albedo: target and fit")))
-    (out / "fit.json").write_text(json.dumps(result.to_dict(), indent=1))
+    # non-finite numbers as strings ("nan"): bare NaN is not JSON
+    (out / "fit.json").write_text(json.dumps(jsonable(result.to_dict()), indent=1, allow_nan=False))
     paths.append(out / "fit.json")
     return paths

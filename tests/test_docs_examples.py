@@ -1,0 +1,108 @@
+"""The examples of docs/fitting.md and docs/mitsuba.md run as written, on the
+files shipped in docs/examples/ (written by docs/examples/make_examples.py), and
+give what the docs say: the fit of the shipped samples recovers the parameters
+they were made from."""
+
+from __future__ import annotations
+
+import ast
+import importlib.util
+import json
+import re
+import shlex
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from plausible.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ("fitting.md", "mitsuba.md")
+#: Examples that take minutes (a perceptual fit to a model target with 4 starts, a 60 s fit).
+SLOW = ("--target cook-torrance", "plausible.fit(\"ashikhmin-shirley\"")
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("make_examples", ROOT / "docs/examples/make_examples.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _blocks(doc):
+    """(language, code) of every fenced block of ``docs/doc``."""
+    return re.findall(r"^```(\w*)\n(.*?)^```", (ROOT / "docs" / doc).read_text(), flags=re.S | re.M)
+
+
+def _param(doc, text):
+    marks = [pytest.mark.slow] if any(s in text for s in SLOW) else []
+    if "mitsuba" in text:
+        marks.append(pytest.mark.drjit)
+    return pytest.param(text, marks=marks, id=f"{doc}:{text.splitlines()[-1][:50]}")
+
+
+COMMANDS = [_param(d, ln.strip()) for d in DOCS for lang, code in _blocks(d) if lang == "sh"
+            for ln in code.splitlines() if ln.strip().startswith("plausible ")]
+PYTHON = [_param(d, code) for d in DOCS for lang, code in _blocks(d) if lang == "python"]
+
+
+@pytest.fixture
+def in_repo_copy(tmp_path, monkeypatch):
+    """A working folder where ``docs/`` is the repository's (read) and outputs land in tmp."""
+    (tmp_path / "docs").symlink_to(ROOT / "docs")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_every_doc_has_examples_to_run():
+    assert len(COMMANDS) >= 2 and len(PYTHON) >= 2
+
+
+def test_shipped_examples_are_what_the_script_writes(tmp_path):
+    _script().main([str(tmp_path)])
+    for name in ("samples.csv", "scene.xml"):
+        assert (tmp_path / name).read_bytes() == (ROOT / "docs/examples" / name).read_bytes(), name
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_documented_command(command, in_repo_copy):
+    r = CliRunner().invoke(main, shlex.split(command)[1:])
+    assert r.exit_code == 0, r.output
+    if "samples.csv" in command:         # made from kd = 0.3, ks = 0.5 (n = 20) with 2 % noise
+        got = json.loads((in_repo_copy / "fit" / "fit.json").read_text())["params"]
+        truth = _script().SAMPLES_TRUTH
+        assert got["n"] == truth["n"]
+        assert got["kd"] == pytest.approx(truth["kd"], rel=0.02) and got["ks"] == pytest.approx(truth["ks"], rel=0.02)
+
+
+def _run_block(code):
+    """Run a block statement by statement; the values of its expression statements, in order."""
+    ns, values = {}, []
+    for node in ast.parse(code).body:
+        if isinstance(node, ast.Expr):
+            values.append(eval(compile(ast.Expression(node.value), "<doc>", "eval"), ns))
+        else:
+            exec(compile(ast.Module([node], []), "<doc>", "exec"), ns)
+    return ns, values
+
+
+@pytest.mark.parametrize("code", PYTHON)
+def test_documented_python(code, in_repo_copy):
+    if "mitsuba" in code:
+        pytest.importorskip("mitsuba")
+    ns, values = _run_block(code)
+    from plausible.fitting import FitResult
+
+    fits = {v.target.label: v for v in values if isinstance(v, FitResult)}
+    for label, res in fits.items():
+        assert all(e is None or np.isfinite(e) for e in res.errors.values()), label
+        if label.endswith("samples.csv"):
+            assert res.params["kd"] == pytest.approx(0.3, rel=0.02) and res.params["ks"] == pytest.approx(0.5, rel=0.02)
+        if label.endswith("paint.binary"):   # Ward fitted to its own MERL table (nearest-cell lookup)
+            assert res.params["alpha_x"] == pytest.approx(0.2, rel=0.1)
+            assert res.params["rs"] == pytest.approx(0.2, rel=0.1)
+    if "img" in ns:                      # the scene renders: finite, non-negative, not blank
+        img = np.asarray(ns["img"])
+        assert img.shape == (64, 64, 3) and np.all(np.isfinite(img)) and img.min() >= 0 and img.std() > 0.01
