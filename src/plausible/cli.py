@@ -298,7 +298,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     except ValueError as e:
         _fail(str(e))
     console.print(f"[bold]{escape(res.model.name)}[/bold] fitted to {escape(res.target.label)} ({metric}, "
-                  f"{res.evaluations} evaluations, {res.seconds:.1f} s)")
+                  f"{res.evaluations} evaluations, {res.seconds:.1f} s)", soft_wrap=True)
     t = Table()
     t.add_column("parameter"); t.add_column("value")
     for k, v in res.params.items():

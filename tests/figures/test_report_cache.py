@@ -40,25 +40,25 @@ def _spp(path):
 
 
 def test_an_interrupted_remake_leaves_the_previous_figure_whole(tmp_path, fake):
-    run(tmp_path, only=[fake], spp=16, progress=False)
+    run(tmp_path, only=[fake], spp=16)
     with pytest.raises(KeyboardInterrupt):
-        run(tmp_path, only=[fake], spp=4096, progress=False)
+        run(tmp_path, only=[fake], spp=4096)
     d = tmp_path / fake
     assert _spp(d / "first.csv") == 16 and _spp(d / "second.csv") == 16      # not the interrupted run's 4096
     assert json.loads((d / "figure.json").read_text())["spp"] == 16
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []   # no partial folder left
-    again = run(tmp_path, only=[fake], spp=16, progress=False)
+    again = run(tmp_path, only=[fake], spp=16)
     assert again[fake]["cached"] is True
 
 
 def test_an_interrupted_run_in_a_fresh_folder_writes_the_index_and_claims_nothing(tmp_path, fake):
     with pytest.raises(KeyboardInterrupt):
-        run(tmp_path, only=[fake], spp=4096, progress=False)
+        run(tmp_path, only=[fake], spp=4096)
     assert (tmp_path / "index.html").exists()
     assert not (tmp_path / fake).exists()
     key = input_key(F.FIGURES[fake], resolution=None, spp=4096, quick=False)
     assert _cached(tmp_path / fake, key) is None
-    assert run(tmp_path, only=[fake], spp=16, progress=False)[fake]["cached"] is False
+    assert run(tmp_path, only=[fake], spp=16)[fake]["cached"] is False
 
 
 def test_figures_cli_unknown_name_creates_nothing(tmp_path):
