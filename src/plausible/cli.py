@@ -74,7 +74,7 @@ class _Bar:
             self._ambient.__exit__(None, None, None)
 
     def __call__(self, total, label=""):
-        if not self.enabled:
+        if not self.enabled or total <= 0:
             return silent(total)
         if self.prog is None:
             self.prog = Progress(TextColumn("{task.description}"), BarColumn(),

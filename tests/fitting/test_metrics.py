@@ -88,6 +88,9 @@ def test_bad_input_raises(g):
         M.errors(g[:-1], g)
     with pytest.raises(ValueError, match="combine"):
         M.errors(g, g, g[:3], g[:3], combine="mean")
+    with pytest.raises(ValueError, match="combine must be one of sum, max, got 'mean'"):
+        M.check_combine("mean")
+    assert M.check_combine("max") == "max"
 
 
 def test_albedo_zero_where_target_is_not_is_infinite():
