@@ -35,8 +35,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["Expr", "SYM", "SymbolicBranchError", "Table", "direction", "param", "trace",
-           "evaluate", "variables"]
+__all__ = ["Expr", "SYM", "SymbolicBranchError", "Table", "direction", "param", "trace", "evaluate"]
 
 
 class SymbolicBranchError(TypeError):
@@ -130,10 +129,6 @@ class Expr:
     def __or__(self, o): return _binary("or", self, o)
     def __ror__(self, o): return _binary("or", o, self)
     def __invert__(self): return _node("not", self)
-
-
-def const(x):
-    return float(x)
 
 
 def direction(name: str) -> tuple:
@@ -357,25 +352,6 @@ def trace(fn, explore: bool = True):
 
 # -- reading a graph ---------------------------------------------------------------------
 
-def variables(*roots) -> set:
-    """Names of the variables the results ``roots`` depend on."""
-    out = set()
-    for r in _flatten(roots):
-        if isinstance(r, Expr):
-            out |= r.deps
-    return out
-
-
-def _flatten(x):
-    if isinstance(x, (tuple, list)):
-        for y in x:
-            yield from _flatten(y)
-    elif isinstance(x, np.ndarray):
-        yield from x.ravel().tolist()
-    else:
-        yield x
-
-
 _EVAL = {
     **{k: v for k, v in _FOLD.items() if k not in ("div", "pow", "power", "and", "or", "not", "abs")},
     "div": lambda a, b: a / b, "abs": np.abs,
@@ -420,21 +396,3 @@ def evaluate(root, env: dict):
 
     with np.errstate(all="ignore"):
         return walk(root)
-
-
-def is_number(x) -> bool:
-    return isinstance(x, _NUMBER) and not isinstance(x, Expr)
-
-
-def node_count(*roots) -> int:
-    """Distinct nodes reachable from ``roots`` (by identity)."""
-    seen = set()
-    stack = [r for r in _flatten(roots) if isinstance(r, Expr)]
-    while stack:
-        e = stack.pop()
-        if id(e) in seen:
-            continue
-        seen.add(id(e))
-        stack.extend(a for a in e.args if isinstance(a, Expr))
-    return len(seen)
-

@@ -67,8 +67,11 @@ def test_glsl_bakes_parameters_or_declares_uniforms():
 
 def test_structural_parameters_stay_baked():
     s = to_glsl(plausible.make("cook-torrance", fresnel="conductor"), uniforms=True)
-    assert [u.name for u in s.uniforms] == ["plausible_m", "plausible_rs", "plausible_eta", "plausible_k"]
-    assert s.baked["fresnel"] == "conductor" and s.baked["geometry"] == "vgroove"
+    # rs is not read with fresnel='conductor' (and eta, k are not read with 'schlick')
+    assert [u.name for u in s.uniforms] == ["plausible_m", "plausible_eta", "plausible_k"]
+    assert s.baked["fresnel"] == "'conductor'" and s.baked["geometry"] == "'vgroove'"
+    s = to_glsl(plausible.make("cook-torrance"), uniforms=True)
+    assert [u.name for u in s.uniforms] == ["plausible_m", "plausible_rs"]
 
 
 def test_pumped_up_carries_its_albedo_table_as_a_const_array():

@@ -29,11 +29,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
 from .. import symbolic
+from ..bxdf import BxDF, _fmt
 from ..symbolic import SYM
 from .glsl import Emitter, channels3, helpers, literal
 
@@ -114,15 +116,7 @@ def uniform_params(model, uniforms=True) -> list:
     return [ok[n] for n in names]
 
 
-def _fmt(v):
-    if isinstance(v, np.ndarray):
-        return "[" + ", ".join(f"{x:g}" for x in v) + "]"
-    if isinstance(v, float):
-        return f"{v:g}"
-    return str(v)
-
-
-def _symbolic_params(model, specs, name_of):
+def _symbolic_params(model, specs):
     """``p`` and ``q`` of the hooks with the parameters ``specs`` symbolic."""
     p = dict(vars(model.p))
     q = dict(vars(model.q))
@@ -138,8 +132,6 @@ def _symbolic_params(model, specs, name_of):
 
 def _has_sampling(model) -> bool:
     cls = type(model)
-    from ..bxdf import BxDF
-
     return cls._pdf is not BxDF._pdf and cls._sample is not BxDF._sample
 
 
@@ -161,7 +153,7 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         uniforms' initial values).
     uniforms : bool or list of str
         ``False``: parameters baked in as constants; ``True``: every scalar and
-        colour parameter is a uniform named ``<prefix>_<name>`` (``float``, or
+        colour parameter that the formulas read is a uniform named ``<prefix>_<name>`` (``float``, or
         ``vec3`` for a colour); a list: only those.  A Python ``if`` of a hook
         on a uniform parameter is exported as both branches joined by ``?:``.
     prefix : str
@@ -183,7 +175,7 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         if name_of(s.name) in RESERVED:
             raise ValueError(f"{model.name}: parameter name {s.name!r} clashes with an argument "
                              f"of the exported functions; pass names= or a prefix")
-    p, q = _symbolic_params(model, specs, name_of)
+    p, q = _symbolic_params(model, specs)
 
     def glsl_name(var):
         base, _, comp = var.partition(".")
@@ -198,16 +190,23 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         raise ValueError(f"{model.name}: GLSL export supports grey or RGB colours, the model has "
                          f"{chans[0]} channels")
     f = channels3(_trace(model, model._f, wi, wo, p))
+    roots = list(f)
     # wi, wo are unit vectors (the contract's front end normalises; a shader's caller does)
     funcs = [em.function(f"vec3 {prefix}_f(vec3 wi, vec3 wo)", f, "vec3({0}, {1}, {2})")]
     do_sampling = sampling and _has_sampling(model)
     if do_sampling:
         pdf = _trace(model, model._pdf, wi, wo, q)
+        roots.append(pdf)
         funcs.append(em.function(f"float {prefix}_pdf(vec3 wi, vec3 wo)", [pdf], "{0}"))
         wo_s = _trace(model, model._sample, wi, symbolic.direction("u"), q)
+        roots.extend(wo_s)
         funcs.append(em.function(f"vec3 {prefix}_sample_direction(vec3 wi, vec3 u)", list(wo_s),
                                  "vec3({0}, {1}, {2})"))
         funcs.append(_sample_front_end(prefix))
+    # a parameter the traced functions never read (eta and k without fresnel='conductor')
+    # is no uniform: a slider that does nothing would mislead
+    read = {v.partition(".")[0] for r in roots if isinstance(r, symbolic.Expr) for v in r.deps}
+    specs = [s for s in specs if s.name in read]
     values = []
     for s in specs:
         v = model.params[s.name]
@@ -324,7 +323,5 @@ def write(model, fmt: str, path, uniforms=False) -> str:
         text = to_brdf(model)
     else:
         raise ValueError(f"export format must be 'glsl' or 'brdf', got {fmt!r}")
-    from pathlib import Path
-
     Path(path).write_text(text)
     return text
