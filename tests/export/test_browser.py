@@ -135,18 +135,20 @@ def test_power_helper_follows_the_ops_contract(browser):
 
 def test_sampling_agrees_with_numpy_in_webgl(browser):
     """pdf at the same pairs (same criterion as f); the sampled direction for the
-    same (wi, u), and weight and pdf of the sample against NumPy at the shader's
-    own direction (a lobe choice near its threshold may differ in float32)."""
+    same (wi, u) (median within 1e-6 rad, all within 1e-4: float32 warps; no lobe
+    choice flips at these seeds), and weight and pdf of the sample against NumPy
+    at the shader's own direction."""
     rng = np.random.default_rng(3)
     wi, wo = direction_pairs(seed=11)
     u = rng.random((len(wi), 3)).astype(np.float32)
-    models = [plausible.make(n) for n in plausible.names()]
-    models = [m for m in models if to_glsl(m).sampling]
+    shaders = [(plausible.make(n), to_glsl(plausible.make(n))) for n in plausible.names()]
+    shaders = [(m, s) for m, s in shaders if s.sampling]
+    models = [m for m, _ in shaders]
     browser.set_inputs([wi, wo, u])
     body_pdf = "outColor = vec4(plausible_pdf(a.xyz, b.xyz));"
     body_s = "vec3 w; float p; vec3 d = plausible_sample(a.xyz, c.xyz, w, p); outColor = vec4(d, p);"
     body_w = "vec3 w; float p; vec3 d = plausible_sample(a.xyz, c.xyz, w, p); outColor = vec4(w, 0.0);"
-    res = browser.run([job(to_glsl(m), b) for m in models for b in (body_pdf, body_s, body_w)])
+    res = browser.run([job(s, b) for _, s in shaders for b in (body_pdf, body_s, body_w)])
     w64, u64 = wi.astype(np.float64), u.astype(np.float64)
     bad = []
     for k, m in enumerate(models):
@@ -156,11 +158,11 @@ def test_sampling_agrees_with_numpy_in_webgl(browser):
         if relative_errors(pdf[:, 0], ref_pdf).max() > RTOL:
             bad.append((m.name, "pdf", relative_errors(pdf[:, 0], ref_pdf).max()))
         ref = m._sample_block(w64, u64, (len(wi),))
-        ang = np.arccos(np.clip(np.sum(smp[:, :3] * ref.wo, axis=-1), -1, 1))
-        if np.median(ang) > 1e-5 or np.mean(ang < 1e-3) < 0.995:
-            bad.append((m.name, "directions", np.median(ang), np.mean(ang < 1e-3)))
+        g = smp[:, :3].astype(np.float64) / np.linalg.norm(smp[:, :3], axis=-1, keepdims=True)
+        ang = 2.0 * np.arcsin(np.minimum(np.linalg.norm(g - ref.wo, axis=-1) / 2.0, 1.0))
+        if np.median(ang) > 1e-6 or ang.max() > 1e-4:  # radians (measured: 5e-7, 6.5e-5)
+            bad.append((m.name, "directions", np.median(ang), ang.max()))
         wo_g = smp[:, :3].astype(np.float64)
-        own = m._sample_block(w64, u64, (len(wi),))  # for the shape of weights
         pdf_at = m._pdf_block(w64, wo_g, (len(wi),))
         f_at = reference_f(m, wi, smp[:, :3])
         ok = (pdf_at > 0) & (wo_g[:, 2] > 1e-12)
@@ -170,7 +172,6 @@ def test_sampling_agrees_with_numpy_in_webgl(browser):
             bad.append((m.name, "weight/pdf of the sample",
                         relative_errors(smp[:, 3], np.where(ok, pdf_at, 0.0)).max(),
                         relative_errors(wgt[:, :3], want_w).max()))
-        del own
     assert bad == []
 
 

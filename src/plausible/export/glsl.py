@@ -15,8 +15,10 @@ models' hooks, traced once.  What it guarantees:
   1 computes ``exp(e log1p(b - 1))`` so that ``b^e`` keeps its digits for
   exponents of 10^4 in float32;
 * ``log1p`` (no GLSL built-in) is a helper exact to float32 rounding near 0,
-  ``atan2`` a helper defined at the origin (0, as NumPy), and ``acos`` a helper
-  through ``atan`` (built-in ``acos`` errs by up to 7e-5 on SwiftShader).
+  ``atan2`` a helper defined at the origin (0, as NumPy), ``acos`` a helper
+  through ``atan`` (built-in ``acos`` errs by up to 7e-5 on SwiftShader), and
+  ``sin``/``cos`` helpers with their own range reduction and polynomials
+  (built-ins err by up to 2e-4 on SwiftShader).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from ..symbolic import Expr, Table
 
 _INFIX = {"add": "+", "sub": "-", "mul": "*", "div": "/", "lt": "<", "le": "<=", "gt": ">",
           "ge": ">=", "eq": "==", "ne": "!=", "and": "&&", "or": "||"}
-_CALL = {"sqrt": "sqrt", "exp": "exp", "log": "log", "sin": "sin", "cos": "cos", "tan": "tan",
+_CALL = {"sqrt": "sqrt", "exp": "exp", "log": "log",
          "floor": "floor", "abs": "abs", "min": "min", "max": "max"}
 
 
@@ -78,6 +80,32 @@ def helpers(prefix: str, used: set) -> str:
     float d = b - 1.0;
     if (abs(d) < 0.25) return exp(e * {prefix}_log1p(d));
     return exp2(e * log2(b));
+}}
+""")
+    if "sincos" in used:
+        out.append(f"""float {prefix}_sin_quadrant(float x, float shift)
+{{
+    // sin(x + shift pi/2): x - k pi/2 with pi/2 in three parts (k pi/2 exact for |k| < 2^13),
+    // then Taylor polynomials on [-pi/4, pi/4] (truncation < 2e-9); GLSL's sin and cos
+    // may err by 2e-4 (SwiftShader)
+    float k = floor(x * {literal(2.0 / math.pi)} + 0.5);
+    float r = ((x - k * {literal(1.5703125)}) - k * {literal(0.0004837512969970703)}) - k * {literal(7.549790126404332e-08)};
+    float r2 = r * r;
+    float s = r * (1.0 + r2 * ({literal(-1 / 6)} + r2 * ({literal(1 / 120)} + r2 * ({literal(-1 / 5040)} + r2 * {literal(1 / 362880)}))));
+    float c = 1.0 + r2 * (-0.5 + r2 * ({literal(1 / 24)} + r2 * ({literal(-1 / 720)} + r2 * ({literal(1 / 40320)} + r2 * {literal(-1 / 3628800)}))));
+    float q = k + shift;
+    q -= 4.0 * floor(q * 0.25);  // the quadrant, 0.0 to 3.0 (exact: whole numbers)
+    return q == 0.0 ? s : (q == 1.0 ? c : (q == 2.0 ? -s : -c));
+}}
+
+float {prefix}_sin(float x)
+{{
+    return {prefix}_sin_quadrant(x, 0.0);
+}}
+
+float {prefix}_cos(float x)
+{{
+    return {prefix}_sin_quadrant(x, 1.0);
 }}
 """)
     if "acos" in used:
@@ -193,6 +221,12 @@ class Emitter:
         if op == "log1p":
             self.used.add("log1p")
             return f"{self.prefix}_log1p({a[0]})"
+        if op in ("sin", "cos"):
+            self.used.add("sincos")
+            return f"{self.prefix}_{op}({a[0]})"
+        if op == "tan":
+            self.used.add("sincos")
+            return f"{self.prefix}_sin({a[0]}) / {self.prefix}_cos({a[0]})"
         if op == "acos":
             self.used.add("acos")
             return f"{self.prefix}_acos({a[0]})"
