@@ -355,5 +355,26 @@ def figures(out, only, spp, resolution, quick, force, list_only):
     sys.exit(1 if failed or red else 0)
 
 
+@main.command("export")
+@click.argument("model")
+@PARAM_OPT
+@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf"]), default="glsl", show_default=True,
+              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file.")
+@click.option("--out", required=True, type=click.Path(dir_okay=False), help="File to write.")
+@click.option("--uniforms", is_flag=True, help="glsl: parameters as uniforms instead of constants.")
+def export_cmd(model, params, fmt, out, uniforms):
+    """Export MODEL as a shader (see docs/export.md)."""
+    from .export import write
+
+    m = _model(model, params)
+    try:
+        write(m, fmt, out, uniforms=uniforms)
+    except ValueError as e:
+        _fail(str(e))
+    except OSError as e:
+        _fail(f"cannot write {out}: {e.strerror}")
+    click.echo(f"wrote {out} ({fmt}, {m!r})")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -51,17 +51,45 @@ def power_cosine_lobe_about(ops, axis, n, u1, u2):
     return vec.to_world(local, s, t, axis)
 
 
-def pow_cos_from_sin2(ops, sin2, e):
+def pow_cos_from_sin2(ops, sin2, e, cos_theta=None):
     """``cos(theta)^e`` computed from ``sin^2(theta)`` as ``exp(e/2 log1p(-sin^2))``.
 
     Accurate near the pole, where ``cos(theta)`` rounds to 1 and a direct power of
     it loses every digit of the lobe's shape for exponents of 10^4 and more.
     ``sin2 >= 1`` (the horizon) gives 0, or 1 when ``e == 0``.
+
+    Given ``cos_theta`` as well (the cosine of the same angle), angles beyond 45
+    degrees (``sin^2 > 1/2``) use ``max(cos_theta, 0)^e`` instead: near the
+    horizon ``1 - sin^2`` cancels (in float32, in a shader or Dr.Jit's single
+    precision, ``cos = 1e-3`` keeps 2 digits), while the cosine is accurate.
     """
     inside = sin2 < 1.0
     s = ops.where(inside, ops.maximum(sin2, 0.0), 0.0)
     val = ops.exp(0.5 * e * ops.log1p(-s))
+    if cos_theta is not None:
+        # exp(e log(cos)), not ops.power: Dr.Jit 1.5's power returns -inf when the
+        # result underflows (measured: dr.power(0.308849, 604.094))
+        pos = cos_theta > 0
+        far = ops.exp(e * ops.log(ops.where(pos, cos_theta, 1.0)))
+        return ops.where(sin2 > 0.5, ops.where(pos, far, ops.where(e == 0, 1.0, 0.0)), val)
     return ops.where(inside, val, ops.where(e == 0, 1.0, 0.0))
+
+
+def power_near_one(ops, x, one_minus_x, e):
+    """``max(x, 0)^e`` for ``x <= 1``, given also ``1 - x`` computed without cancellation.
+
+    Above ``x = 1/2`` it is ``exp(e log1p(-(1 - x)))``: a lobe ``x^e`` with ``e``
+    up to 10^4 peaks where ``x`` rounds to within one unit of 1 (6e-8 in
+    float32, a relative error of 6e-4 in ``x^e``), while ``1 - x`` from a
+    difference of vectors keeps its digits.  Below, ``exp(e log(x))`` (0 for
+    ``x <= 0``, or 1 when ``e == 0``); not ``ops.power``, whose Dr.Jit version
+    returns ``-inf`` when the result underflows.
+    """
+    near = x > 0.5
+    v_near = ops.exp(e * ops.log1p(-ops.where(near, ops.minimum(ops.maximum(one_minus_x, 0.0), 0.5), 0.0)))
+    pos = x > 0
+    v_far = ops.where(pos, ops.exp(e * ops.log(ops.where(pos, x, 1.0))), ops.where(e == 0, 1.0, 0.0))
+    return ops.where(near, v_near, v_far)
 
 
 def anisotropic_exponent(ops, hx, hy, nu, nv):
@@ -150,7 +178,7 @@ def half_vector_lobe_pdf(ops, nu, nv, h, e):
     ``(n.h)^e`` is taken from ``sin^2`` (:func:`pow_cos_from_sin2`), so ``h = n``
     gives exactly the peak value ``sqrt((nu+1)(nv+1))/(2 pi)``.
     """
-    lobe = pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], e)
+    lobe = pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], e, h[2])
     norm = ops.sqrt((nu + 1.0) * (nv + 1.0)) / (2.0 * PI)
     return ops.where(h[2] > 0, norm * lobe, 0.0)
 

@@ -159,9 +159,19 @@ def lobe_vector(wi, lobe):
 
 def lobe_value(ops, wi, wo, lobe):
     """``rho max(cx Lx Vx + cy Ly Vy + cz Lz Vz, 0)^n`` (Lafortune et al. 1997;
-    albedo pumping-up paper eq. 7).  ``lobe`` in normalised form."""
-    s = vec.dot(lobe_vector(wi, lobe), wo)
-    return ops.where(s > 0, lobe[4] * ops.power(ops.maximum(s, 0.0), lobe[3]), 0.0)
+    albedo pumping-up paper eq. 7).  ``lobe`` in normalised form.
+
+    Near the peak the power is taken from
+    ``1 - a.V = (|a - V|^2 + sum_k (1 - c_k^2) L_k^2) / 2`` (unit ``L``, ``V``;
+    every term is >= 0 for a normalised lobe, so nothing cancels) by
+    :func:`plausible.warps.power_near_one`, which keeps float32 evaluations
+    (shaders) accurate for exponents of 10^4."""
+    a = lobe_vector(wi, lobe)
+    s = vec.dot(a, wo)
+    d = (a[0] - wo[0], a[1] - wo[1], a[2] - wo[2])
+    rest = sum((1.0 - c * c) * w * w for c, w in zip(lobe[:3], wi) if c * c != 1.0)
+    one_minus = 0.5 * (vec.dot(d, d) + rest)
+    return ops.where(s > 0, lobe[4] * warps.power_near_one(ops, s, one_minus, lobe[3]), 0.0)
 
 
 def lafortune(ops, wi, wo, rd, lobes):

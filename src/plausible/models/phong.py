@@ -38,9 +38,19 @@ def phong_cos(wi, wo):
 
 
 def phong_lobe(ops, wi, wo, n):
-    """``cos^n(alpha)`` for ``cos(alpha) > 0``, else 0."""
+    """``cos^n(alpha)`` for ``cos(alpha) > 0``, else 0.
+
+    Near the peak the power is taken from ``1 - cos(alpha) = |R - wo|^2 / 2``
+    (unit vectors) by :func:`plausible.warps.power_near_one`: in float32
+    (shaders, Dr.Jit's single precision) ``R.wo`` rounds to within 6e-8 of 1,
+    a relative error of 6e-4 in ``cos^n`` for ``n = 10^4``; the difference
+    vector keeps its digits.  Symmetric in ``wi`` and ``wo`` bitwise, and the
+    same arithmetic as a Lafortune lobe ``(-1, -1, 1)``.
+    """
     c = phong_cos(wi, wo)
-    return ops.where(c > 0, ops.power(ops.maximum(c, 0.0), n), 0.0)
+    r = vec.mirror(wi)
+    d = (r[0] - wo[0], r[1] - wo[1], r[2] - wo[2])
+    return ops.where(c > 0, warps.power_near_one(ops, c, 0.5 * vec.dot(d, d), n), 0.0)
 
 
 def phong_norm(n):
@@ -53,7 +63,7 @@ def phong_norm(n):
 def blinn_lobe(ops, wi, wo, n):
     """``(n.h)^n``, computed from ``sin^2`` of the half vector (accurate near the peak)."""
     h = vec.half_vector(ops, wi, wo)
-    return ops.where(h[2] > 0, warps.pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], n), 0.0)
+    return ops.where(h[2] > 0, warps.pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], n, h[2]), 0.0)
 
 
 def blinn_norm(ops, n):

@@ -1,0 +1,327 @@
+"""Export a model as GLSL: a WebGL2/OpenGL function and a Disney BRDF Explorer file.
+
+The model's own hooks are traced with the symbolic namespace
+(:mod:`plausible.symbolic`) and printed by :mod:`plausible.export.glsl`, so a
+shader computes the same formula as NumPy and Dr.Jit (to float32 rounding;
+``tests/export/test_browser.py`` measures it in a real browser).
+
+* :func:`to_glsl` -- a :class:`GLSLShader`: GLSL ES 3.00 functions
+  ``vec3 plausible_f(vec3 wi, vec3 wo)`` (the BRDF without the cosine, local
+  frame: ``z`` the normal, ``x`` the tangent ``u``), and where the model samples,
+  ``float plausible_pdf(vec3 wi, vec3 wo)`` and
+  ``vec3 plausible_sample(vec3 wi, vec3 u, out vec3 weight, out float pdf)``
+  (the contract of :mod:`plausible.bxdf`).  Parameters are baked in as constants,
+  or with ``uniforms=True`` (or a list of names) declared as uniforms.
+* :func:`to_brdf` -- the text of a ``.brdf`` file of Disney's BRDF Explorer
+  (``wdas/brdf``): ``analytic``, a ``::begin parameters`` block built from the
+  parameter specifications, ``::begin shader`` with
+  ``vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)``, and an ``isFunc``
+  section with the importance sampler.  Its loader drops every line that begins
+  with ``#`` (so no preprocessor lines) and compiles with ``#version 410``.
+
+What is not a uniform: choices (``fresnel="schlick"``), whole numbers
+(``times``), Lafortune's lobe list and pumped-up's base model change the
+formula itself, so they are always baked in.  Pumped-up's albedo table (a
+function of the base) becomes a ``const float`` array in the shader.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from .. import symbolic
+from ..bxdf import BxDF, _fmt
+from ..symbolic import SYM
+from .glsl import Emitter, channels3, helpers, literal
+
+__all__ = ["GLSLShader", "Uniform", "to_glsl", "to_brdf", "uniform_params", "write"]
+
+#: Parameter kinds that can be uniforms (others change the formula's structure).
+UNIFORM_KINDS = ("scalar", "color")
+
+#: Names the generated functions use for their own arguments.
+RESERVED = {"wi", "wo", "u", "weight", "pdf", "L", "V", "N", "X", "Y"}
+
+
+@dataclass(frozen=True)
+class Uniform:
+    """A parameter exported as a uniform: GLSL ``name``, ``type`` (``float`` or
+    ``vec3``), its current ``value`` and its spec (:class:`~plausible.params.Param`)."""
+
+    name: str
+    type: str
+    value: tuple
+    param: object
+
+    def declaration(self) -> str:
+        return f"uniform {self.type} {self.name};"
+
+
+@dataclass
+class GLSLShader:
+    """The exported functions of one model, in parts a host shader can assemble.
+
+    ``uniforms`` (declarations via :meth:`declarations`), ``tables`` (``const``
+    arrays), ``helpers`` (the guarded ``pow``/``log1p``/``atan2``), ``functions``
+    (``<prefix>_f`` and, if ``sampling``, ``<prefix>_pdf``, ``<prefix>_sample``);
+    ``str(shader)`` is all of it in that order, with a header comment.  No
+    ``#version``, no ``precision`` line and no ``main``: those are the host's.
+    """
+
+    model: str
+    prefix: str
+    uniforms: list
+    tables: str
+    helpers: str
+    functions: str
+    sampling: bool
+    baked: dict = field(default_factory=dict)
+
+    def declarations(self) -> str:
+        return "\n".join(u.declaration() for u in self.uniforms)
+
+    @property
+    def text(self) -> str:
+        head = (f"// {self.model}, exported by plausible (GLSL ES 3.00 / GLSL 4.10).\n"
+                f"// {self.prefix}_f(wi, wo): BRDF value, no cosine; local frame: z = normal, x = tangent u.\n")
+        if self.baked:
+            head += "// baked in: " + ", ".join(f"{k}={v}" for k, v in self.baked.items()) + "\n"
+        parts = [head + self.declarations(), self.tables, self.helpers, self.functions]
+        return "\n\n".join(p.strip("\n") for p in parts if p.strip()) + "\n"
+
+    def __str__(self):
+        return self.text
+
+
+def uniform_params(model, uniforms=True) -> list:
+    """The parameter specs of ``model`` that become uniforms: every scalar and
+    colour parameter for ``True``, none for ``False``, or those named in a list
+    (ValueError for a name that is not such a parameter)."""
+    specs = [p for p in type(model).PARAMS if p.kind in UNIFORM_KINDS and not p.integer]
+    if uniforms is True:
+        return specs
+    if not uniforms:
+        return []
+    names = list(uniforms)
+    ok = {p.name: p for p in specs}
+    bad = [n for n in names if n not in ok]
+    if bad:
+        raise ValueError(f"{model.name}: cannot make {', '.join(map(repr, bad))} a uniform; "
+                         f"parameters that can be uniforms: {', '.join(ok) or 'none'}")
+    return [ok[n] for n in names]
+
+
+def _symbolic_params(model, specs):
+    """``p`` and ``q`` of the hooks with the parameters ``specs`` symbolic."""
+    p = dict(vars(model.p))
+    q = dict(vars(model.q))
+    for spec in specs:
+        if spec.kind == "color":
+            arr = symbolic.param(spec.name, 3)
+            p[spec.name] = arr
+            q[spec.name] = (arr[0] + arr[1] + arr[2]) * (1.0 / 3.0)
+        else:
+            p[spec.name] = q[spec.name] = symbolic.param(spec.name)
+    return SimpleNamespace(**p), SimpleNamespace(**q)
+
+
+def _has_sampling(model) -> bool:
+    cls = type(model)
+    return cls._pdf is not BxDF._pdf and cls._sample is not BxDF._sample
+
+
+def _trace(model, hook, *args):
+    try:
+        return symbolic.trace(lambda: hook(SYM, *args))
+    except symbolic.SymbolicBranchError as e:
+        raise ValueError(f"{model.name}: {hook.__name__} cannot be exported: {e}") from None
+
+
+def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool = True,
+            names=None) -> GLSLShader:
+    """Export ``model`` (a :class:`~plausible.bxdf.BxDF`) as GLSL functions.
+
+    Parameters
+    ----------
+    model : BxDF
+        The model with its parameters (their values are the constants, or the
+        uniforms' initial values).
+    uniforms : bool or list of str
+        ``False``: parameters baked in as constants; ``True``: every scalar and
+        colour parameter that the formulas read is a uniform named ``<prefix>_<name>`` (``float``, or
+        ``vec3`` for a colour); a list: only those.  A Python ``if`` of a hook
+        on a uniform parameter is exported as both branches joined by ``?:``.
+    prefix : str
+        Prefix of every global name (functions, helpers, tables, uniforms), so
+        several models can share one shader.
+    sampling : bool
+        Also export ``<prefix>_pdf`` and ``<prefix>_sample`` (if the model samples).
+    names : callable, optional
+        Maps a parameter name to its GLSL name (default ``<prefix>_<name>``).
+
+    Returns
+    -------
+    GLSLShader
+        ``str(shader)`` is a self-contained GLSL ES 3.00 snippet.
+    """
+    specs = uniform_params(model, uniforms)
+    name_of = names or (lambda n: f"{prefix}_{n}")
+    for s in specs:
+        if name_of(s.name) in RESERVED:
+            raise ValueError(f"{model.name}: parameter name {s.name!r} clashes with an argument "
+                             f"of the exported functions; pass names= or a prefix")
+    p, q = _symbolic_params(model, specs)
+
+    def glsl_name(var):
+        base, _, comp = var.partition(".")
+        if base in ("wi", "wo", "u"):
+            return var
+        return name_of(base) + (f".{comp}" if comp else "")
+
+    em = Emitter(prefix, glsl_name)
+    wi, wo = symbolic.direction("wi"), symbolic.direction("wo")
+    chans = [1] if model.channels is None else [model.channels]
+    if chans[0] not in (1, 3):
+        raise ValueError(f"{model.name}: GLSL export supports grey or RGB colours, the model has "
+                         f"{chans[0]} channels")
+    f = channels3(_trace(model, model._f, wi, wo, p))
+    roots = list(f)
+    # wi, wo are unit vectors (the contract's front end normalises; a shader's caller does)
+    funcs = [em.function(f"vec3 {prefix}_f(vec3 wi, vec3 wo)", f, "vec3({0}, {1}, {2})")]
+    do_sampling = sampling and _has_sampling(model)
+    if do_sampling:
+        pdf = _trace(model, model._pdf, wi, wo, q)
+        roots.append(pdf)
+        funcs.append(em.function(f"float {prefix}_pdf(vec3 wi, vec3 wo)", [pdf], "{0}"))
+        wo_s = _trace(model, model._sample, wi, symbolic.direction("u"), q)
+        roots.extend(wo_s)
+        funcs.append(em.function(f"vec3 {prefix}_sample_direction(vec3 wi, vec3 u)", list(wo_s),
+                                 "vec3({0}, {1}, {2})"))
+        funcs.append(_sample_front_end(prefix))
+    # a parameter the traced functions never read (eta and k without fresnel='conductor')
+    # is no uniform: a slider that does nothing would mislead
+    read = {v.partition(".")[0] for r in roots if isinstance(r, symbolic.Expr) for v in r.deps}
+    specs = [s for s in specs if s.name in read]
+    values = []
+    for s in specs:
+        v = model.params[s.name]
+        if s.kind == "color":
+            values.append(Uniform(name_of(s.name), "vec3", tuple(float(x) for x in np.broadcast_to(v, 3)), s))
+        else:
+            values.append(Uniform(name_of(s.name), "float", (float(v),), s))
+    uni = {s.name for s in specs}
+    baked = {k: _fmt(v) for k, v in model.params.items() if k not in uni}
+    return GLSLShader(model=repr(model), prefix=prefix, uniforms=values, tables=em.table_declarations(),
+                      helpers=helpers(prefix, em.used), functions="\n".join(funcs),
+                      sampling=do_sampling, baked=baked)
+
+
+def _sample_front_end(prefix: str) -> str:
+    """The contract's ``sample`` (:meth:`plausible.bxdf.BxDF.sample`) around the
+    traced direction: normalise ``wo``, its pdf, ``weight = f cos / pdf``, zero
+    below the horizon."""
+    return f"""vec3 {prefix}_sample(vec3 wi, vec3 u, out vec3 weight, out float pdf)
+{{
+    // wi a unit vector; u in [0, 1)^3: u.x picks a lobe, u.yz drive the warp (plausible.bxdf.BxDF.sample)
+    vec3 wo = {prefix}_sample_direction(wi, u);
+    float len = length(wo);
+    wo = len > 0.0 ? wo / len : vec3(0.0, 0.0, -1.0);
+    pdf = {prefix}_pdf(wi, wo);
+    bool ok = pdf > 0.0 && wo.z > {literal(1e-12)} && wi.z > {literal(1e-12)};
+    weight = ok ? {prefix}_f(wi, wo) * (wo.z / (ok ? pdf : 1.0)) : vec3(0.0);
+    pdf = ok ? pdf : 0.0;
+    return wo;
+}}
+"""
+
+
+# -- Disney BRDF Explorer ---------------------------------------------------------------
+
+def _slider(spec, value):
+    """``min max`` of a float parameter's slider (an infinite bound becomes a finite one)."""
+    lo, hi = spec.lo, spec.hi
+    if not math.isfinite(lo):
+        lo = min(0.0, -10.0 * abs(value))
+    if not math.isfinite(hi):
+        hi = max(1.0, 10.0 * abs(value), lo + 1.0)
+    return lo, hi
+
+
+def _num(x: float) -> str:
+    return repr(float(x))
+
+
+def to_brdf(model) -> str:
+    """The text of a Disney BRDF Explorer ``.brdf`` file for ``model``.
+
+    Scalar parameters become ``float name min max default`` sliders (an
+    infinite bound is replaced by ``10 x`` the value), colours
+    ``color name r g b``; everything else is baked in (listed in a comment).
+    The shader section holds the traced functions and
+    ``vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)``, which expresses ``L``
+    and ``V`` in the frame ``(X, Y, N)`` and calls ``plausible_f``; the
+    ``isFunc`` section holds ``plausible_pdf`` and ``plausible_sample`` and, in
+    world space, ``vec3 sampleBRDF(vec3 V, vec3 u, vec3 N, vec3 X, vec3 Y,
+    out vec3 weight, out float pdf)``.
+    """
+    shader = to_glsl(model, uniforms=True, names=lambda n: n)
+    params = []
+    for u in shader.uniforms:
+        if u.type == "vec3":
+            params.append(f"color {u.name} " + " ".join(_num(x) for x in u.value))
+        else:
+            lo, hi = _slider(u.param, u.value[0])
+            params.append(f"float {u.name} {_num(lo)} {_num(hi)} {_num(u.value[0])}")
+    f_end = shader.functions.index(f"float {shader.prefix}_pdf") if shader.sampling else None
+    f_part = shader.functions[:f_end] if f_end is not None else shader.functions
+    wrapper = """vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
+{
+    // L (toward the light) = wi, V (toward the viewer) = wo, in the frame (X, Y, N)
+    return plausible_f(vec3(dot(L, X), dot(L, Y), dot(L, N)), vec3(dot(V, X), dot(V, Y), dot(V, N)));
+}
+"""
+    lines = ["analytic", "",
+             f"# {shader.model}, exported by plausible (see its docs/export.md)",
+             "# Lines beginning with '#' are comments for the BRDF Explorer loader.",
+             *(["# baked in: " + ", ".join(f"{k}={v}" for k, v in shader.baked.items())] if shader.baked else []),
+             "", "::begin parameters", *params, "::end parameters", "",
+             "::begin shader", *_code_lines("\n\n".join(x for x in (shader.tables, shader.helpers, f_part, wrapper)
+                                                       if x.strip())),
+             "::end shader"]
+    if shader.sampling:
+        is_func = shader.functions[f_end:] + """
+vec3 sampleBRDF(vec3 V, vec3 u, vec3 N, vec3 X, vec3 Y, out vec3 weight, out float pdf)
+{
+    // importance sampling in world space: returns L for the viewer direction V
+    vec3 wo = plausible_sample(vec3(dot(V, X), dot(V, Y), dot(V, N)), u, weight, pdf);
+    return wo.x * X + wo.y * Y + wo.z * N;
+}
+"""
+        lines += ["", "::begin isFunc", *_code_lines(is_func), "::end isFunc"]
+    return "\n".join(lines) + "\n"
+
+
+def _code_lines(code: str) -> list:
+    out = []
+    for ln in code.rstrip("\n").split("\n"):
+        if ln.lstrip().startswith("#") or ln.strip().startswith("::"):
+            raise AssertionError(f"generated GLSL line would be dropped by the .brdf loader: {ln!r}")
+        out.append(ln)
+    return out
+
+
+def write(model, fmt: str, path, uniforms=False) -> str:
+    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path``; returns the text."""
+    if fmt == "glsl":
+        text = to_glsl(model, uniforms=uniforms).text
+    elif fmt == "brdf":
+        text = to_brdf(model)
+    else:
+        raise ValueError(f"export format must be 'glsl' or 'brdf', got {fmt!r}")
+    Path(path).write_text(text)
+    return text

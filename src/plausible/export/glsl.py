@@ -1,0 +1,257 @@
+"""Print an expression graph of :mod:`plausible.symbolic` as GLSL statements.
+
+The printer is the whole of the language knowledge; the formulas come from the
+models' hooks, traced once.  What it guarantees:
+
+* each distinct subexpression is computed once (nodes are identified by their
+  structure, so equal subexpressions built twice by a formula share one
+  temporary), in one ``float``/``bool`` statement of its own;
+* every literal is a float (``1.0``, ``1.0e-12``): GLSL ES does not convert ints;
+* ``where`` becomes ``c ? a : b`` with ``a`` and ``b`` computed before, as
+  NumPy and Dr.Jit compute both branches, so the formulas' guards carry over;
+* ``power(b, e)`` calls a helper with the contract of :mod:`plausible.ops`
+  (``b <= 0`` gives ``1`` for ``e == 0``, else ``0``; GLSL's ``pow`` is
+  undefined for ``b < 0`` and for ``b == 0, e <= 0``), and which for ``b`` near
+  1 computes ``exp(e log1p(b - 1))`` so that ``b^e`` keeps its digits for
+  exponents of 10^4 in float32;
+* ``log1p`` (no GLSL built-in) is a helper exact to float32 rounding near 0,
+  ``atan2`` a helper defined at the origin (0, as NumPy), ``acos`` a helper
+  through ``atan`` (built-in ``acos`` errs by up to 7e-5 on SwiftShader), and
+  ``sin``/``cos`` helpers with their own range reduction and polynomials
+  (built-ins err by up to 2e-4 on SwiftShader).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..symbolic import Expr, Table
+
+_INFIX = {"add": "+", "sub": "-", "mul": "*", "div": "/", "lt": "<", "le": "<=", "gt": ">",
+          "ge": ">=", "eq": "==", "ne": "!=", "and": "&&", "or": "||"}
+_CALL = {"sqrt": "sqrt", "exp": "exp", "log": "log",
+         "floor": "floor", "abs": "abs", "min": "min", "max": "max"}
+
+
+def literal(x: float) -> str:
+    """``x`` as a GLSL float literal (always with a decimal point), negative
+    values in parentheses; infinities as bit patterns (GLSL has no ``inf``)."""
+    x = float(x)
+    if math.isnan(x):
+        raise ValueError("a NaN constant cannot be exported (a formula computed NaN from parameters)")
+    if math.isinf(x) or abs(x) > 3.4028234663852886e38:
+        s = "uintBitsToFloat(0x7F800000u)"
+        return s if x > 0 else f"(-{s})"
+    r = repr(abs(x))
+    if "e" in r:
+        mant, exp = r.split("e")
+        if "." not in mant:
+            mant += ".0"
+        r = f"{mant}e{exp}"
+    elif "." not in r:
+        r += ".0"
+    return f"(-{r})" if math.copysign(1.0, x) < 0 else r
+
+
+def helpers(prefix: str, used: set) -> str:
+    """The helper functions ``used`` needs (``pow``, ``log1p``, ``atan2``), in order."""
+    out = []
+    if "log1p" in used or "pow" in used:
+        out.append(f"""float {prefix}_log1p(float x)
+{{
+    // log(1 + x) to float32 accuracy near 0 (log(1.0 + x) loses the digits of a small x):
+    // 2 atanh(z), z = x / (2 + x), by its series for |x| < 0.25 (truncation < 4e-10)
+    if (abs(x) < 0.25) {{
+        float z = x / (2.0 + x);
+        float z2 = z * z;
+        return 2.0 * z * (1.0 + z2 * (1.0 / 3.0 + z2 * (0.2 + z2 * (1.0 / 7.0 + z2 * (1.0 / 9.0)))));
+    }}
+    return log(1.0 + x);
+}}
+""")
+    if "pow" in used:
+        out.append(f"""float {prefix}_pow(float b, float e)
+{{
+    // plausible.ops.power: defined for b >= 0 with 0^0 = 1 (GLSL pow is undefined for
+    // b < 0 and for b == 0, e <= 0); near b = 1 through log1p, so b^e keeps its digits for e ~ 1e4
+    if (b <= 0.0) return e == 0.0 ? 1.0 : 0.0;
+    float d = b - 1.0;
+    if (abs(d) < 0.25) return exp(e * {prefix}_log1p(d));
+    return exp2(e * log2(b));
+}}
+""")
+    if "sincos" in used:
+        out.append(f"""float {prefix}_sin_quadrant(float x, float shift)
+{{
+    // sin(x + shift pi/2): x - k pi/2 with pi/2 in three parts (k pi/2 exact for |k| < 2^13),
+    // then Taylor polynomials on [-pi/4, pi/4] (truncation < 2e-9); GLSL's sin and cos
+    // may err by 2e-4 (SwiftShader)
+    float k = floor(x * {literal(2.0 / math.pi)} + 0.5);
+    float r = ((x - k * {literal(1.5703125)}) - k * {literal(0.0004837512969970703)}) - k * {literal(7.549790126404332e-08)};
+    float r2 = r * r;
+    float s = r * (1.0 + r2 * ({literal(-1 / 6)} + r2 * ({literal(1 / 120)} + r2 * ({literal(-1 / 5040)} + r2 * {literal(1 / 362880)}))));
+    float c = 1.0 + r2 * (-0.5 + r2 * ({literal(1 / 24)} + r2 * ({literal(-1 / 720)} + r2 * ({literal(1 / 40320)} + r2 * {literal(-1 / 3628800)}))));
+    float q = k + shift;
+    q -= 4.0 * floor(q * 0.25);  // the quadrant, 0.0 to 3.0 (exact: whole numbers)
+    return q == 0.0 ? s : (q == 1.0 ? c : (q == 2.0 ? -s : -c));
+}}
+
+float {prefix}_sin(float x)
+{{
+    return {prefix}_sin_quadrant(x, 0.0);
+}}
+
+float {prefix}_cos(float x)
+{{
+    return {prefix}_sin_quadrant(x, 1.0);
+}}
+""")
+    if "acos" in used:
+        out.append(f"""float {prefix}_acos(float x)
+{{
+    // acos(x) as atan(sqrt((1 - x)(1 + x)), x): GLSL's acos may err by 7e-5 near 0 (SwiftShader)
+    return atan(sqrt((1.0 - x) * (1.0 + x)), x);
+}}
+""")
+    if "atan2" in used:
+        out.append(f"""float {prefix}_atan2(float y, float x)
+{{
+    // atan(y, x) is undefined at the origin; NumPy's arctan2 gives 0 there
+    return (x == 0.0 && y == 0.0) ? 0.0 : atan(y, x);
+}}
+""")
+    return "\n".join(out)
+
+
+class Emitter:
+    """Prints graphs as GLSL statements, one temporary per distinct node.
+
+    ``names`` maps a variable of the graph (``"wi.x"``, ``"n"``, ``"rs.y"``) to
+    its GLSL text; ``prefix`` names the helpers and tables.  One emitter may
+    print several functions (:meth:`function`); the helpers and tables they
+    use accumulate in :attr:`used` and :attr:`tables`.
+    """
+
+    def __init__(self, prefix: str, names):
+        self.prefix = prefix
+        self.names = names
+        self.used: set = set()
+        self.tables: dict = {}  # id(Table) -> (name, Table)
+
+    def table_name(self, tab: Table) -> str:
+        if id(tab) not in self.tables:
+            self.tables[id(tab)] = (f"{self.prefix}_table{len(self.tables)}", tab)
+        return self.tables[id(tab)][0]
+
+    def table_declarations(self) -> str:
+        out = []
+        for name, tab in self.tables.values():
+            n = len(tab.values)
+            vals = ", ".join(literal(v) for v in tab.values)
+            out.append(f"const float {name}[{n}] = float[{n}]({vals});")
+        return "\n".join(out)
+
+    def statements(self, roots):
+        """GLSL statements computing ``roots`` (nodes or numbers) and the text of each root."""
+        lines: list = []
+        key_of: dict = {}    # id(node) -> structural key
+        text_of: dict = {}   # structural key -> GLSL text (temporary, literal or name)
+
+        def key(e):
+            return key_of[id(e)]
+
+        def visit(root):
+            if not isinstance(root, Expr):
+                return literal(root)
+            stack = [(root, False)]
+            while stack:
+                e, ready = stack.pop()
+                if id(e) in key_of:
+                    continue
+                if not ready:
+                    stack.append((e, True))
+                    stack.extend((a, False) for a in e.args if id(a) not in key_of)
+                    continue
+                if e.op == "var":
+                    k = ("var", e.value)
+                    text = self.names(e.value)
+                elif e.op == "const":
+                    k = ("const", float(e.value).hex())
+                    text = literal(e.value)
+                else:
+                    k = (e.op, tuple(key(a) for a in e.args),
+                         id(e.value) if isinstance(e.value, Table) else None)
+                    text = None
+                key_of[id(e)] = k
+                if k in text_of:
+                    continue
+                if text is None:
+                    text = f"t{len(lines)}"
+                    ty = "bool" if e.is_bool else "float"
+                    lines.append(f"{ty} {text} = {self.expression(e, [text_of[key(a)] for a in e.args])};")
+                text_of[k] = text
+            return text_of[key(root)]
+
+        return lines, [visit(r) for r in roots]
+
+    def expression(self, e: Expr, a: list) -> str:
+        op = e.op
+        if op in _INFIX:
+            return f"{a[0]} {_INFIX[op]} {a[1]}"
+        if op in _CALL:
+            return f"{_CALL[op]}({', '.join(a)})"
+        if op == "neg":
+            return f"-{a[0]}"
+        if op == "not":
+            return f"!{a[0]}"
+        if op == "where":
+            return f"{a[0]} ? {a[1]} : {a[2]}"
+        if op == "pow":  # Python's ** : small whole exponents are products (any base)
+            ex = e.args[1]
+            if ex.op == "const" and ex.value in (0.0, 1.0, 2.0, 3.0, 4.0):
+                n = int(ex.value)
+                return " * ".join([a[0]] * n) if n else "1.0"
+            self.used.add("pow")
+            return f"{self.prefix}_pow({a[0]}, {a[1]})"
+        if op == "power":
+            self.used.add("pow")
+            return f"{self.prefix}_pow({a[0]}, {a[1]})"
+        if op == "log1p":
+            self.used.add("log1p")
+            return f"{self.prefix}_log1p({a[0]})"
+        if op in ("sin", "cos"):
+            self.used.add("sincos")
+            return f"{self.prefix}_{op}({a[0]})"
+        if op == "tan":
+            self.used.add("sincos")
+            return f"{self.prefix}_sin({a[0]}) / {self.prefix}_cos({a[0]})"
+        if op == "acos":
+            self.used.add("acos")
+            return f"{self.prefix}_acos({a[0]})"
+        if op == "atan2":
+            self.used.add("atan2")
+            return f"{self.prefix}_atan2({a[0]}, {a[1]})"
+        if op == "gather":
+            return f"{self.table_name(e.value)}[int({a[0]})]"
+        raise ValueError(f"GLSL export: no translation of the operation {op!r}")
+
+    def function(self, signature: str, roots, ret: str, prologue=(), epilogue=()) -> str:
+        """A GLSL function ``signature`` that computes ``roots`` and returns
+        ``ret.format(*texts)``."""
+        lines, texts = self.statements(roots)
+        body = list(prologue) + lines + list(epilogue) + [f"return {ret.format(*texts)};"]
+        return signature + "\n{\n" + "".join(f"    {ln}\n" for ln in body) + "}\n"
+
+
+def channels3(value) -> list:
+    """A result as three channel values (a grey value is repeated)."""
+    if isinstance(value, np.ndarray):
+        vals = value.ravel().tolist()
+        if len(vals) == 1:
+            return vals * 3
+        if len(vals) != 3:
+            raise ValueError(f"GLSL export supports grey or RGB colours (3 channels), got {len(vals)} channels")
+        return vals
+    return [value] * 3
