@@ -119,6 +119,8 @@ def untraverse(prm, array, template):
     if prm.kind in ("scalar", "color"):
         if a.size != 1:
             raise ValueError(f"parameter '{prm.name}' must be one number, got {a.size} values")
+        if template is not None and np.float32(template) == np.float32(a[0]):
+            return template  # unchanged: the value as given, not its float32 rounding
         return int(a[0]) if prm.integer else float(a[0])
     shape = np.shape(template)
     if a.size != int(np.prod(shape)):

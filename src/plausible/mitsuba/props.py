@@ -189,8 +189,13 @@ def metal_textures(mi, material: str) -> dict:
 # -- textures: what values they can take ------------------------------------------------
 
 def texture_class(tex) -> str:
-    """Mitsuba's class name of a texture (``BitmapTexture``, ``Checkerboard``, ...)."""
-    return repr(tex).split("[", 1)[0].strip()
+    """Mitsuba's class name of a texture (``BitmapTexture``, ``Checkerboard``, ...);
+    ``""`` for a texture that cannot print itself (a Python texture without
+    ``to_string``)."""
+    try:
+        return repr(tex).split("[", 1)[0].strip()
+    except RuntimeError:
+        return ""
 
 
 def texture_texels(mi, tex):
