@@ -225,6 +225,7 @@ class ParamState:
             pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
             P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
         self.model = model
+        self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
         self.q_const = dict(vars(model.q))
         self.m_flags, self.sampled_type = bsdf_flags(
             self.mi, model, self.info, any(t.is_spatially_varying() for t in self.textures.values()))
@@ -232,12 +233,18 @@ class ParamState:
     def changed(self, keys):
         """After ``params.update()``: rebuild, or restore the previous values and
         raise if the new ones are refused."""
-        old = {k: np.array(a) for k, a in self.arrays.items()}
+        for k in self.textures:
+            try:
+                self.known[k] = self._check_texture(k)
+            except ValueError as err:
+                # a texture cannot be given back its old data: it is clamped from now on
+                self.known[k] = False
+                raise ValueError(f"{err} (params.update() refused; the texture is clamped to "
+                                 f"the range per shading point until it is valid)") from None
         try:
-            self.known = {k: self._check_texture(k) for k in self.textures}
             self.build()
         except ValueError as err:
-            for k, a in old.items():
+            for k, a in self.accepted.items():
                 self.mi.set_property(self.arrays[k], type(self.arrays[k])(a))
             raise ValueError(f"{err} (params.update() refused; the previous values are kept)") from None
 
