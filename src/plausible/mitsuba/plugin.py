@@ -103,7 +103,7 @@ def traversable(mi, prm, value):
     if prm.kind in ("scalar", "color"):
         if prm.integer:
             return mi.UInt32(int(value)), nd
-        return mi.Float(float(value)), mi.ParamFlags.Differentiable
+        return _dr().opaque(mi.Float, float(value)), mi.ParamFlags.Differentiable
     return mi.Float(np.asarray(value, dtype=np.float64).ravel()), nd
 
 
@@ -183,6 +183,11 @@ class ParamState:
             else:
                 self.arrays[name], self.flags[name] = t
         self.templates = dict(values)
+        self.q_opaque = ()
+        self.build()
+        # sampling constants that may change (traversed) and that the sampler takes as arrays
+        self.q_opaque = [k for k, f in self.flags.items()
+                         if f == mi.ParamFlags.Differentiable and array_safe(mi, self.model, k)]
         self.build()
         self.varying = [k for k, t in self.textures.items() if t.is_spatially_varying()]
         self.q_varying = [k for k in self.varying if array_safe(mi, self.model, k)]
@@ -227,6 +232,9 @@ class ParamState:
         self.model = model
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
         self.q_const = dict(vars(model.q))
+        for k in self.q_opaque:
+            # an opaque array, not a literal: a new value does not recompile the kernels
+            self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
         self.m_flags, self.sampled_type = bsdf_flags(
             self.mi, model, self.info, any(t.is_spatially_varying() for t in self.textures.values()))
 
