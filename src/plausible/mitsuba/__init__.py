@@ -30,7 +30,7 @@ Conventions (see ``docs/mitsuba.md``):
 from __future__ import annotations
 
 from .. import registry
-from .plugin import make_plugin_class
+from .plugin import make_merl_class, make_plugin_class
 from .props import COMMON_ALIASES, PLUGIN_ALIASES, aliases_for
 
 
@@ -71,7 +71,8 @@ def register(variant: str | None = None) -> list:
 
     Plugins are registered for the current Mitsuba variant (``variant`` sets it
     first; with none set, ``llvm_ad_rgb`` is tried, then ``scalar_rgb``).  Call
-    again after switching variants.  Returns the plugin names.
+    again after switching variants.  Returns the plugin names (those of
+    :func:`plugin_names`, then ``merl``).
     """
     import mitsuba as mi
 
@@ -86,8 +87,12 @@ def register(variant: str | None = None) -> list:
             classes[plugin] = cls
             mi.register_bsdf(plugin, (lambda c: (lambda props: c(props)))(cls))
         out.append(plugin)
+    if "merl" not in classes:
+        classes["merl"] = make_merl_class()
+        mi.register_bsdf("merl", (lambda c: (lambda props: c(props)))(classes["merl"]))
+    out.append("merl")
     return out
 
 
-__all__ = ["register", "plugin_names", "aliases_for", "make_plugin_class",
+__all__ = ["register", "plugin_names", "aliases_for", "make_plugin_class", "make_merl_class",
            "COMMON_ALIASES", "PLUGIN_ALIASES"]

@@ -146,10 +146,11 @@ class ParamState:
     from the current values (textures at their clamped mean).
     """
 
-    def __init__(self, mi, plugin, info, props, alias, log=None):
+    def __init__(self, mi, plugin, info, props, alias, log=None, make=None, ignore=()):
         self.mi, self.plugin, self.info = mi, plugin, info
         self.log = log
-        keys = list(props.keys())
+        self.make = make if make is not None else info.cls
+        keys = [k for k in props.keys() if k not in ignore]
         material = props["material"] if "material" in props else None
         if material is not None:
             P.check_material(plugin, info, keys)
@@ -223,7 +224,7 @@ class ParamState:
             prm = self.info.param(name)
             mean = float(np.mean(np.asarray(tex.mean())))
             consts[name] = min(max(mean, prm.lo), prm.hi)
-        model = self.info.cls(**consts)
+        model = self.make(**consts)
         known = {k: t for k, t in self.textures.items() if self.known[k] and t.is_spatially_varying()}
         if known:
             base = {k: v for k, v in consts.items() if k not in known}
@@ -316,10 +317,18 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
         ALIASES = alias
         PLUGIN = plugin
 
+        #: properties read by a subclass itself (not model parameters)
+        EXTRA_PROPS: tuple = ()
+
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
-            self.state = ParamState(mi, plugin, info, props, alias, log)
+            self.state = ParamState(mi, plugin, info, props, alias, log,
+                                    make=self._model_factory(props), ignore=self.EXTRA_PROPS)
             self._set_flags()
+
+        def _model_factory(self, props):
+            """``function(**params) -> model``; None: the registry's class."""
+            return None
 
         def _set_flags(self):
             self.m_flags = self.state.m_flags
@@ -395,5 +404,40 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
     return PlausibleBSDF
 
 
-__all__ = ["make_plugin_class", "bsdf_flags", "array_safe", "traversable", "untraverse",
+def make_merl_class():
+    """The ``merl`` plugin: a measured BRDF in the MERL binary format
+    (:class:`plausible.fitting.merl.MerlBRDF`, nearest-cell lookup, cosine
+    sampling) read from ``<string name="filename" value="..."/>``.  RGB variants
+    only (the table holds red, green and blue)."""
+    import mitsuba as mi
+
+    from ..fitting.merl import MerlBRDF, read_merl
+    from ..params import ModelInfo
+
+    info = ModelInfo(name="merl", cls=MerlBRDF, params=(), reciprocal=True, energy_conserving=False,
+                     description="measured isotropic BRDF, MERL binary format (Matusik et al. 2003)",
+                     references=("Matusik, Pfister, Brand, McMillan, 'A data-driven reflectance "
+                                 "model', SIGGRAPH 2003",))
+    base = make_plugin_class("merl", "merl", info)
+
+    class MerlBSDF(base):
+        EXTRA_PROPS = ("filename",)
+
+        def _model_factory(self, props):
+            if "filename" not in props:
+                raise ValueError("merl: the parameter 'filename' (a MERL .binary file) is required")
+            if mi.is_spectral:
+                raise ValueError(f"merl: a MERL table holds RGB values; use an RGB variant, "
+                                 f"not {mi.variant()!r}")
+            model = read_merl(str(props["filename"]))
+            return lambda **params: model
+
+        def to_string(self):
+            return f"merl[{self.model.source!r}]"
+
+    MerlBSDF.__name__ = MerlBSDF.__qualname__ = "Plausible_merl"
+    return MerlBSDF
+
+
+__all__ = ["make_plugin_class", "make_merl_class", "bsdf_flags", "array_safe", "traversable", "untraverse",
            "channel_mean", "ParamState"]
