@@ -189,7 +189,7 @@ class ParamState:
         # sampling constants that may change (traversed) and that the sampler takes as arrays
         self.q_opaque = [k for k, f in self.flags.items()
                          if f == mi.ParamFlags.Differentiable and array_safe(mi, self.model, k)]
-        self.build()
+        self._set_sampling()
         self.varying = [k for k, t in self.textures.items() if t.is_spatially_varying()]
         self.q_varying = [k for k in self.varying if array_safe(mi, self.model, k)]
         for k in set(self.varying) - set(self.q_varying):
@@ -232,12 +232,16 @@ class ParamState:
             P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
         self.model = model
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
-        self.q_const = dict(vars(model.q))
-        for k in self.q_opaque:
-            # an opaque array, not a literal: a new value does not recompile the kernels
-            self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
+        self._set_sampling()
         self.m_flags, self.sampled_type = bsdf_flags(
             self.mi, model, self.info, any(t.is_spatially_varying() for t in self.textures.values()))
+
+    def _set_sampling(self):
+        """The sampling constants ``q`` of the model; opaque arrays, not literals,
+        where the sampler takes arrays, so a new value does not recompile kernels."""
+        self.q_const = dict(vars(self.model.q))
+        for k in self.q_opaque:
+            self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
 
     def changed(self, keys):
         """After ``params.update()``: rebuild, or restore the previous values and
