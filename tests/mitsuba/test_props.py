@@ -69,3 +69,24 @@ def test_no_variant_error_names_each_reason(monkeypatch):
     with pytest.raises(RuntimeError, match="llvm_ad_rgb: ImportError: no llvm_ad_rgb here; "
                                            "scalar_rgb: ImportError: no scalar_rgb here"):
         pm._ensure_variant()
+
+
+def test_plugins_load_and_evaluate_in_a_scalar_variant():
+    """scalar_rgb (one value per call, Python floats): eval equals the NumPy model;
+    mi.traverse holds no Python floats (Mitsuba cannot write them)."""
+    import numpy as np
+
+    before = mi.variant()
+    try:
+        pm.register("scalar_rgb")
+        b = mi.load_dict({"type": "ashikhmin_shirley", "nu": 20.0, "nv": 50.0})
+        si = mi.SurfaceInteraction3f()
+        wi, wo = np.array([0.3, 0.1, 0.9]), np.array([-0.2, -0.15, 0.8])
+        wi, wo = wi / np.linalg.norm(wi), wo / np.linalg.norm(wo)
+        si.wi = mi.Vector3f(*wi)
+        got = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(*wo)))
+        want = plausible.make("ashikhmin-shirley", nu=20.0, nv=50.0).eval(wo, wi) * wo[2]
+        np.testing.assert_allclose(got, want, rtol=1e-5)
+        assert len(mi.traverse(b)) == 0
+    finally:
+        mi.set_variant(before)

@@ -72,6 +72,8 @@ def array_safe(mi, model, name: str) -> bool:
     """
     from ..ops import drjit_ops
 
+    if not _dr().is_array_v(mi.Float):
+        return False  # a scalar variant: one value per call, never an array
     ops = drjit_ops(mi.Float)
     q = dict(vars(model.q))
     q[name] = mi.Float([0.4, 0.6]) * float(q[name] or 1.0)
@@ -103,6 +105,8 @@ def traversable(mi, prm, value):
     if prm.kind in ("scalar", "color"):
         if prm.integer:
             return mi.UInt32(int(value)), nd
+        if not _dr().is_array_v(mi.Float):  # a scalar variant: a Python float
+            return mi.Float(float(value)), mi.ParamFlags.Differentiable
         return _dr().opaque(mi.Float, float(value)), mi.ParamFlags.Differentiable
     return mi.Float(np.asarray(value, dtype=np.float64).ravel()), nd
 
@@ -394,6 +398,8 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
             for k, tex in self.state.textures.items():
                 callback.put(k, tex, mi.ParamFlags.Differentiable)
             for k, a in self.state.arrays.items():
+                if isinstance(a, (int, float)):
+                    continue  # a scalar variant: Mitsuba can only write Dr.Jit types
                 callback.put(k, a, self.state.flags[k])
 
         def parameters_changed(self, keys=()):

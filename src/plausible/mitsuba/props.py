@@ -45,7 +45,6 @@ PLUGIN_ALIASES = {
     "ashikhmin_shirley": {"specular_reflectance": ("rs",), "diffuse_reflectance": ("rd",)},
     "ward": {"alpha_u": ("alpha_x",), "alpha_v": ("alpha_y",), "alpha": (("alpha_x", "alpha_y"),)},
     "cook_torrance": {"alpha": ("m",), "roughness": ("m",)},
-    "neumann_metal": {"alpha_u": ("nu",), "alpha_v": ("nv",)},
 }
 
 #: Texture classes whose every value is a texel of their data (bilinear
