@@ -143,15 +143,17 @@ def test_derivative_check_detects_a_wrong_derivative():
 
 def extreme_cases(plugin):
     """Parameter sets at the extremes the models declare for their exponents /
-    roughness (each extreme in turn, the rest as in the tests)."""
+    roughness and at the ends of their ranges (each in turn, the rest as in the
+    tests)."""
     info = plausible.info(PLUGIN_MODELS[plugin])
     base = grey_params(plugin)
     out = []
     for prm in info.params:
         if prm.kind != "scalar" or prm.integer or prm.default is None:
             continue
-        for v in prm.extremes:
-            out.append({**base, prm.name: float(v)})
+        ends = [v for v in (prm.lo, prm.hi) if np.isfinite(v)]
+        for v in sorted(set(float(x) for x in prm.extremes) | set(ends)):
+            out.append({**base, prm.name: v})
     return out or [base]
 
 
@@ -170,7 +172,7 @@ def edge_directions():
 @pytest.mark.parametrize("plugin", PLUGIN_LIST)
 def test_no_nan_gradients_at_extremes(plugin):
     """Reverse-mode gradients of eval are finite for every continuous parameter at
-    the extremes of each exponent / roughness, at normal incidence, at the
+    the extremes and range ends of each exponent / roughness, at normal incidence, at the
     mirror direction, at grazing and on the horizon."""
     wi, wo = edge_directions()
     for params_dict in extreme_cases(plugin):
