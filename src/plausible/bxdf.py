@@ -190,6 +190,14 @@ class BxDF:
     PARAMS: ClassVar[tuple] = ()
     #: Registry entry (set by :func:`plausible.registry.register`).
     info: ClassVar = None
+    #: What the model is made of, declared as pbrt-v4's ``BxDF::Flags()``: a
+    #: subset of ``{"diffuse", "glossy"}`` (reflection lobes; no model here is
+    #: specular or transmissive).  The Mitsuba plugins' flags are read from it.
+    LOBES: ClassVar[frozenset] = frozenset({"glossy"})
+    #: Parameters whose default ``None`` the model computes from the others:
+    #: ``{name: function(p)}`` of the parameter namespace, written against any
+    #: backend (the Mitsuba plugins recompute it from differentiable values).
+    DERIVED: ClassVar[dict] = {}
 
     def __init__(self, **params):
         owner = type(self).__name__

@@ -95,13 +95,37 @@ class ModelInfo:
         raise KeyError(name)
 
 
+def parse_groups(text: str) -> list:
+    """Parse groups of numbers: groups separated by ``;``, numbers within a group
+    by commas or spaces (the one parser of structured values, used by the command
+    line through :func:`parse_value` and by the Mitsuba plugins' string properties).
+
+    ``"-1 -1 1 20 1.75; 1,1,1,5,0.1"`` -> ``[[-1.0, -1.0, 1.0, 20.0, 1.75], [1.0, 1.0, 1.0, 5.0, 0.1]]``.
+    A word raises :class:`ValueError` naming the group and the text given.
+    """
+    out = []
+    for g in text.split(";"):
+        if not g.strip():
+            continue
+        try:
+            out.append([float(x) for x in g.replace(",", " ").split()])
+        except ValueError:
+            raise ValueError(f"groups of numbers separated by ';' (numbers by commas or spaces) "
+                             f"expected, got {g.strip()!r} in {text!r}") from None
+    return out
+
+
+def format_groups(value) -> str:
+    """Inverse of :func:`parse_groups` (a list of number tuples -> string)."""
+    return "; ".join(" ".join(repr(float(x)) for x in g) for g in value)
+
+
 def parse_value(text: str):
     """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour), groups
     separated by ``;`` (``-1,-1,1,20,1.5;1,1,1,8,0.3``: a list of tuples, e.g.
-    Lafortune's lobes) or a word."""
+    Lafortune's lobes; :func:`parse_groups`) or a word."""
     if ";" in text:
-        groups = [parse_value(g) for g in text.split(";") if g.strip()]
-        return [g if isinstance(g, list) else [g] for g in groups]
+        return parse_groups(text)
     parts = [t.strip() for t in text.split(",")]
     try:
         nums = [float(t) for t in parts]

@@ -21,6 +21,7 @@ if VARIANT is None:
 
 import plausible  # noqa: E402
 import plausible.mitsuba as pm  # noqa: E402
+from plausible.params import format_groups  # noqa: E402
 
 PLUGINS = pm.register()
 PLUGIN_MODELS = pm.plugin_names()
@@ -69,7 +70,7 @@ def to_dict(plugin: str, params: dict) -> dict:
         if kind == "model":
             d[k] = v  # a nested model spec string (pumped_up's base)
         elif kind not in ("scalar", "color", "choice"):
-            d[k] = pm.format_structured(v)
+            d[k] = format_groups(v)
         elif isinstance(v, (list, tuple, np.ndarray)):
             d[k] = {"type": "rgb", "value": [float(x) for x in v]}
         else:

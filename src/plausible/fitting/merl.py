@@ -28,8 +28,9 @@ there.
 
 :class:`MerlBRDF` satisfies the model contract (``eval``, ``pdf``, ``sample``;
 sampling is cosine-weighted), so a measured BRDF can be checked, plotted,
-fitted and used like any other model.  It is NumPy-only: the Mitsuba plugins
-do not cover it.
+fitted and used like any other model.  Its lookup is written against ``ops``
+(``ops.table`` / ``ops.gather``), so the Mitsuba plugin ``merl``
+(:mod:`plausible.mitsuba`) renders the same table.
 """
 
 from __future__ import annotations
@@ -105,6 +106,7 @@ class MerlBRDF(BxDF):
     """
 
     PARAMS = ()
+    LOBES = frozenset({"diffuse", "glossy"})
 
     def __init__(self, values, source: str = "table"):
         super().__init__()
@@ -126,11 +128,24 @@ class MerlBRDF(BxDF):
     def _index(self, ops, wi, wo):
         return cell_index(ops, *half_diff(ops, wi, wo))
 
+    def _backend_table(self, ops):
+        """The flat table as the backend's array (made once per backend)."""
+        cache = self.__dict__.setdefault("_tables", {})
+        key = (ops.name, id(ops))
+        if key not in cache:
+            cache[key] = ops.table(self._table)
+        return cache[key]
+
     def _f(self, ops, wi, wo, p):
-        # NumPy only: the colour axis of the front end is a trailing length-1 axis.
-        idx = self._index(ops, wi, wo).astype(np.int64)
-        vals = self._table[idx + NCELLS * np.arange(3)]
-        return ops.where(above(ops, wi, wo), vals, 0.0)
+        """The three channels read at the pair's cell.  NumPy: the colour axis of
+        the front end is a trailing length-1 axis, so one gather reads all three;
+        Dr.Jit: a tuple of three channel arrays (the plugin makes it a colour)."""
+        idx = self._index(ops, wi, wo)
+        tab = self._backend_table(ops)
+        ok = above(ops, wi, wo)
+        if ops.name == "numpy":
+            return ops.where(ok, ops.gather(tab, idx + NCELLS * np.arange(3)), 0.0)
+        return tuple(ops.where(ok, ops.gather(tab, idx + NCELLS * c), 0.0) for c in range(3))
 
     def _pdf(self, ops, wi, wo, q):
         return ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)

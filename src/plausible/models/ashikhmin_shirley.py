@@ -177,6 +177,8 @@ class AshikhminShirley(BxDF):
     ``pdf`` is the same mixture ("a weighted average", journal Sec. 3).
     """
 
+    LOBES = frozenset({"diffuse", "glossy"})
+
     PARAMS = (NU, NV, RS, RD)
 
     def spec_probability(self, ops, wi, q):
@@ -223,6 +225,8 @@ class AshikhminShirleySpecular(BxDF):
 class AshikhminShirleyDiffuse(BxDF):
     """``AshikhminShirleyDiffuse(rs, rd)``: ``rho_d`` of journal eq. 5, sampled
     cosine-weighted (as the paper does)."""
+
+    LOBES = frozenset({"diffuse"})
 
     PARAMS = (RS, RD)
 

@@ -38,7 +38,11 @@ def beckmann_d(ops, h, m):
     z = ops.where(ok, h[2], 1.0)
     z2 = z * z
     tan2 = (h[0] * h[0] + h[1] * h[1]) / z2
-    return ops.where(ok, ops.exp(-tan2 / (m * m)) / (PI * m * m * z2 * z2), 0.0)
+    e = ops.exp(-tan2 / (m * m))
+    # where the exponential underflows, D is 0: guard the denominator too, whose
+    # square (in the derivative of the quotient) underflows in float32 (m = 1e-4, hz ~ 1e-4)
+    live = ok & (e > 0)
+    return ops.where(live, e / ops.where(live, PI * m * m * z2 * z2, 1.0), 0.0)
 
 
 def vgroove_g(ops, wi, wo, h):

@@ -217,6 +217,8 @@ class Lafortune(BxDF):
     ``reciprocal-phong(ks, n)`` plus ``rd / pi``.
     """
 
+    LOBES = frozenset({"diffuse", "glossy"})
+
     PARAMS = (
         LobesParam("lobes", DEFAULT_LOBES, doc="generalized cosine lobes (cx, cy, cz, n, rho)",
                    extremes=(((-1.0, -1.0, 1.0, 0.0, 0.5 / math.pi),),

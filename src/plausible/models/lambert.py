@@ -19,6 +19,7 @@ def lambert(ops, wi, wo, rd):
 class Lambertian(BxDF):
     """``Lambertian(rd)``: ``f = rd / pi``; sampled cosine-weighted, so ``weight = rd``."""
 
+    LOBES = frozenset({"diffuse"})
     PARAMS = (Param("rd", 0.8, 0.0, 1.0, "color", "diffuse reflectance (albedo)", (0.0, 1.0)),)
 
     def _f(self, ops, wi, wo, p):

@@ -57,6 +57,9 @@ class NeumannMetal(BxDF):
         Param("k", 3.0, 0.0, 100.0, "color", "conductor extinction k (fresnel='conductor')"),
     )
 
+    #: ``c=None`` means the largest energy-conserving normalisation (n + 2) / (2 pi)
+    DERIVED = {"c": lambda p: phong_norm(p.n)}
+
     def __init__(self, **params):
         # ``c=None`` means the default (n + 2) / (2 pi); resolve it before validation.
         n = params.get("n", self.PARAMS[0].default)

@@ -107,6 +107,8 @@ class ModifiedPhong(BxDF):
     mixture.
     """
 
+    LOBES = frozenset({"diffuse", "glossy"})
+
     PARAMS = (
         Param("kd", 0.5, 0.0, 1.0, "color", "diffuse reflectance", (0.0, 1.0)),
         Param("ks", 0.2, 0.0, 1.0, "color", "specular reflectance", (0.0, 1.0)),

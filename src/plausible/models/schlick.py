@@ -154,6 +154,8 @@ class Schlick(BxDF):
     term that tends to 1 at grazing angles); ``plausible check`` reports it.
     """
 
+    LOBES = frozenset({"diffuse", "glossy"})
+
     PARAMS = (
         Param("r", 0.2, 1e-3, 1.0, "scalar", "roughness (0 mirror, 1 diffuse)", (1e-3, 1.0)),
         Param("p", 1.0, 1e-3, 1.0, "scalar", "isotropy (1 isotropic, 0 anisotropic)", (1e-3, 0.1)),

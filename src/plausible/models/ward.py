@@ -86,6 +86,8 @@ class Ward(BxDF):
     reflected, with ``pdf_o = p_h / (4 wi.h)``; otherwise cosine-weighted.
     """
 
+    LOBES = frozenset({"diffuse", "glossy"})
+
     PARAMS = (
         Param("alpha_x", 0.1, 1e-4, 1.0, doc="RMS slope along the tangent u", extremes=(0.01, 0.5)),
         Param("alpha_y", 0.1, 1e-4, 1.0, doc="RMS slope along the bitangent v", extremes=(0.01, 0.5)),

@@ -1,0 +1,453 @@
+"""The plugin class: a thin ``mi.BSDF`` around a model's hooks.
+
+A plugin class has to be made after the Mitsuba variant is set, hence the
+factory :func:`make_plugin_class`; what its methods do is written as functions
+of this module and of :mod:`plausible.mitsuba.props`, which can be read and
+tested alone:
+
+* :func:`bsdf_flags` -- Mitsuba's flags from what the model declares
+  (:attr:`plausible.bxdf.BxDF.LOBES`), the isotropy probe
+  :func:`plausible.analysis.is_isotropic`, the textures and the registry's
+  ``reciprocal``;
+* :func:`array_safe` -- can the model's sampler take a per-point value of a
+  parameter (a dry run);
+* :func:`traversable` -- how each parameter appears in ``mi.traverse``
+  (a Dr.Jit array and its flags);
+* :class:`ParamState` -- the plugin's parameters: textures, the traversed
+  arrays, the NumPy model built from them (which checks every range and
+  constraint) and the values the hooks receive at a shading point.
+
+A plugin's life: ``__init__`` reads the properties (:func:`props.read_param`),
+checks the textures (:func:`props.check_texture`, :func:`props.check_pointwise`)
+and builds the model; ``parameters_changed`` (after ``params.update()``) does
+the same again from the traversed values, and restores the previous values if
+the new ones are refused.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from .. import registry, vec
+from ..analysis import is_isotropic
+from . import props as P
+
+
+def bsdf_flags(mi, model, info, varying: bool):
+    """``(flags, sampled_type)`` of a model, as pbrt's ``BxDF::Flags()``.
+
+    ``DiffuseReflection`` / ``GlossyReflection`` from ``model.LOBES``;
+    ``Anisotropic`` where :func:`~plausible.analysis.is_isotropic` says the value
+    changes as both directions rotate about the normal; ``SpatiallyVarying``
+    for varying textures; ``NonSymmetric`` for non-reciprocal models.  A sample
+    is typed ``GlossyReflection``, or ``DiffuseReflection`` for a purely
+    diffuse model.
+    """
+    F = mi.BSDFFlags
+    lobes = model.LOBES
+    flags = F.FrontSide
+    if "diffuse" in lobes:
+        flags |= F.DiffuseReflection
+    if "glossy" in lobes:
+        flags |= F.GlossyReflection
+    if not is_isotropic(model):
+        flags |= F.Anisotropic
+    if varying:
+        flags |= F.SpatiallyVarying
+    if not info.reciprocal:
+        flags |= F.NonSymmetric
+    sampled = F.GlossyReflection if "glossy" in lobes else F.DiffuseReflection
+    return flags, sampled
+
+
+def array_safe(mi, model, name: str) -> bool:
+    """Can the sampling hooks take a per-point (array) value of ``q.name``?
+
+    A hook may use a Python ``if`` on a sampling parameter (allowed for plain
+    floats, e.g. Modified Phong's lobe-choice probability); then that
+    parameter is sampled with its texture's mean (still unbiased: ``pdf`` and
+    ``sample`` use the same ``q``).  Checked with a dry run on two-element arrays.
+    """
+    from ..ops import drjit_ops
+
+    if not _dr().is_array_v(mi.Float):
+        return False  # a scalar variant: one value per call, never an array
+    ops = drjit_ops(mi.Float)
+    q = dict(vars(model.q))
+    q[name] = mi.Float([0.4, 0.6]) * float(q[name] or 1.0)
+    qn = SimpleNamespace(**q)
+    w = (mi.Float([0.1, 0.2]), mi.Float([0.0, 0.1]), mi.Float([0.9, 0.95]))
+    try:
+        model._pdf(ops, w, w, qn)
+        model._sample(ops, w, w, qn)
+    except Exception:  # noqa: BLE001 - any failure means "not array-safe"
+        return False
+    return True
+
+
+def traversable(mi, prm, value):
+    """``(array, flags)`` under which a non-texture parameter appears in
+    ``mi.traverse``, or None (a nested model spec: a string).
+
+    * continuous scalars and grey colours: ``mi.Float`` of width 1, differentiable;
+    * integers: ``mi.UInt32``; choices: ``mi.UInt32``, the index in ``prm.choices``;
+    * structured values (Lafortune's lobes): ``mi.Float``, the numbers row by row;
+
+    the last three non-differentiable.
+    """
+    nd = mi.ParamFlags.NonDifferentiable
+    if prm.kind == "model":
+        return None
+    if prm.kind == "choice":
+        return mi.UInt32(prm.choices.index(value)), nd
+    if prm.kind in ("scalar", "color"):
+        if prm.integer:
+            return mi.UInt32(int(value)), nd
+        if not _dr().is_array_v(mi.Float):  # a scalar variant: a Python float
+            return mi.Float(float(value)), mi.ParamFlags.Differentiable
+        return _dr().opaque(mi.Float, float(value)), mi.ParamFlags.Differentiable
+    return mi.Float(np.asarray(value, dtype=np.float64).ravel()), nd
+
+
+def untraverse(prm, array, template):
+    """The Python value of a traversed array (inverse of :func:`traversable`)."""
+    a = np.array(array, dtype=np.float64).ravel()
+    if prm.kind == "choice":
+        i = int(a[0]) if a.size == 1 else -1
+        if not 0 <= i < len(prm.choices):
+            raise ValueError(f"parameter '{prm.name}' must be an index in [0, {len(prm.choices) - 1}] "
+                             f"of {prm.range_text()}, got {a.tolist()}")
+        return prm.choices[i]
+    if prm.kind in ("scalar", "color"):
+        if a.size != 1:
+            raise ValueError(f"parameter '{prm.name}' must be one number, got {a.size} values")
+        if template is not None and np.float32(template) == np.float32(a[0]):
+            return template  # unchanged: the value as given, not its float32 rounding
+        return int(a[0]) if prm.integer else float(a[0])
+    shape = np.shape(template)
+    if a.size != int(np.prod(shape)):
+        raise ValueError(f"parameter '{prm.name}' must keep its {int(np.prod(shape))} numbers "
+                         f"(shape {shape}), got {a.size}")
+    return [tuple(r) for r in a.reshape(shape)]
+
+
+def channel_mean(c):
+    """Mean over the channels of a Mitsuba Spectrum / Color3f (a Float)."""
+    total = c[0]
+    for i in range(1, len(c)):
+        total = total + c[i]
+    return total * (1.0 / len(c))
+
+
+class ParamState:
+    """The parameters of one plugin instance (see the module docstring).
+
+    ``textures``: name -> Mitsuba texture; ``arrays``: name -> traversed Dr.Jit
+    array (with ``flags``); ``fixed``: values never traversed (a model spec);
+    ``given``: the parameters the scene set; ``model``: the NumPy model built
+    from the current values (textures at their clamped mean).
+    """
+
+    def __init__(self, mi, plugin, info, props, alias, log=None, make=None, ignore=()):
+        self.mi, self.plugin, self.info = mi, plugin, info
+        self.log = log
+        self.make = make if make is not None else info.cls
+        keys = [k for k in props.keys() if k not in ignore]
+        material = props["material"] if "material" in props else None
+        if material is not None:
+            P.check_material(plugin, info, keys)
+        self.given = P.given_names(plugin, info, keys, alias)
+        self.textures, values = {}, {}
+        for prm in info.params:
+            key = self.given.get(prm.name)
+            v = prm.default if key is None else P.read_param(mi, prm, props, key, plugin)
+            if isinstance(v, mi.Object):
+                self.textures[prm.name] = v
+            elif isinstance(v, np.ndarray) and prm.kind == "color":
+                self.textures[prm.name] = P.srgb(mi, v, bool(prm.hi > 1.0))
+            else:
+                values[prm.name] = v
+        if material is not None:
+            self.textures.update(P.metal_textures(mi, material))
+            if "fresnel" in values and "fresnel" not in self.given and \
+                    "conductor" in info.param("fresnel").choices:
+                values["fresnel"] = "conductor"
+                self.given["fresnel"] = "material"
+        for name in self.textures:
+            values.pop(name, None)
+        self.derived = {k for k, v in values.items()
+                        if v is None and k in info.cls.DERIVED and k not in self.given}
+        self.known = {k: self._check_texture(k) for k in self.textures}
+        self.arrays, self.flags, self.fixed = {}, {}, {}
+        for name, v in values.items():
+            t = None if name in self.derived or v is None else traversable(mi, info.param(name), v)
+            if t is None:
+                self.fixed[name] = v
+            else:
+                self.arrays[name], self.flags[name] = t
+        self.templates = dict(values)
+        self.q_opaque = ()
+        self.build()
+        # sampling constants that may change (traversed) and that the sampler takes as arrays
+        self.q_opaque = [k for k, f in self.flags.items()
+                         if f == mi.ParamFlags.Differentiable and array_safe(mi, self.model, k)]
+        self._set_sampling()
+        self.varying = [k for k, t in self.textures.items() if t.is_spatially_varying()]
+        self.q_varying = [k for k in self.varying if array_safe(mi, self.model, k)]
+        for k in set(self.varying) - set(self.q_varying):
+            self._log(f"{plugin}: sampling uses the mean of texture {k!r} (the model's "
+                      f"sampler is not array-safe in it)")
+
+    def _log(self, text):
+        if self.log is not None:
+            self.log(text)
+
+    def _check_texture(self, name) -> bool:
+        known = P.check_texture(self.mi, self.plugin, self.info.param(name), self.textures[name])
+        if not known:
+            self._log(f"{self.plugin}: the range of texture {name!r} cannot be read; "
+                      f"it is clamped to {self.info.param(name).range_text()} per shading point")
+        return known
+
+    def values(self) -> dict:
+        """The current Python value of every non-texture parameter."""
+        out = dict(self.fixed)
+        for name, a in self.arrays.items():
+            prm = self.info.param(name)
+            out[name] = prm.validate(untraverse(prm, a, self.templates[name]), self.plugin)
+        return out
+
+    def build(self):
+        """Build the NumPy model from the current values (every range and
+        constraint checked by the model), the textures' pointwise constraints,
+        and what the hooks need (``q``, flags)."""
+        consts = {k: v for k, v in self.values().items() if v is not None}
+        for name, tex in self.textures.items():
+            prm = self.info.param(name)
+            mean = float(np.mean(np.asarray(tex.mean())))
+            consts[name] = min(max(mean, prm.lo), prm.hi)
+        model = self.make(**consts)
+        known = {k: t for k, t in self.textures.items() if self.known[k] and t.is_spatially_varying()}
+        if known:
+            base = {k: v for k, v in consts.items() if k not in known}
+            pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
+            P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
+        self.model = model
+        self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
+        self._set_sampling()
+        self.m_flags, self.sampled_type = bsdf_flags(
+            self.mi, model, self.info, any(t.is_spatially_varying() for t in self.textures.values()))
+
+    def _set_sampling(self):
+        """The sampling constants ``q`` of the model; opaque arrays, not literals,
+        where the sampler takes arrays, so a new value does not recompile kernels."""
+        self.q_const = dict(vars(self.model.q))
+        for k in self.q_opaque:
+            self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
+
+    def changed(self, keys):
+        """After ``params.update()``: rebuild, or restore the previous values and
+        raise if the new ones are refused."""
+        for k in self.textures:
+            try:
+                self.known[k] = self._check_texture(k)
+            except ValueError as err:
+                # a texture cannot be given back its old data: it is clamped from now on
+                self.known[k] = False
+                raise ValueError(f"{err} (params.update() refused; the texture is clamped to "
+                                 f"the range per shading point until it is valid)") from None
+        try:
+            self.build()
+        except ValueError as err:
+            for k, a in self.accepted.items():
+                self.mi.set_property(self.arrays[k], type(self.arrays[k])(a))
+            raise ValueError(f"{err} (params.update() refused; the previous values are kept)") from None
+
+    # -- the values the hooks receive --------------------------------------------------
+    def p(self, si):
+        """Every parameter at the shading point ``si``: textures evaluated (scalars
+        as the channel mean of ``eval``, since Mitsuba 3.9's ``checkerboard.eval_1``
+        swaps its colours), clamped to the range where it is not known; the
+        traversed arrays as they are (so derivatives flow); derived values."""
+        mi, dr = self.mi, _dr()
+        vals = dict(self.model.params)
+        for name, a in self.arrays.items():
+            if self.flags[name] == mi.ParamFlags.Differentiable:
+                vals[name] = a
+        for name, tex in self.textures.items():
+            prm = self.info.param(name)
+            v = tex.eval(si) if prm.kind == "color" else channel_mean(tex.eval(si))
+            if not self.known[name]:
+                v = dr.clip(v, max(prm.lo, -1e30), min(prm.hi, 1e30))
+            vals[name] = v
+        ns = SimpleNamespace(**vals)
+        for name in self.derived:
+            setattr(ns, name, self.info.cls.DERIVED[name](ns))
+        return ns
+
+    def q(self, si):
+        """The sampling parameters at ``si`` (channel means; per point where the
+        sampler is array-safe, the model's constants otherwise)."""
+        vals = dict(self.q_const)
+        for k in self.q_varying:
+            v = channel_mean(self.textures[k].eval(si))
+            if not self.known[k]:
+                prm = self.info.param(k)
+                v = _dr().clip(v, max(prm.lo, -1e30), min(prm.hi, 1e30))
+            vals[k] = v
+        return SimpleNamespace(**vals)
+
+
+def _dr():
+    import drjit as dr
+
+    return dr
+
+
+def make_plugin_class(plugin: str, model_name: str, info=None):
+    """A ``mitsuba.BSDF`` subclass wrapping the registered model ``model_name``
+    (or the model described by ``info``, a :class:`plausible.params.ModelInfo`)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    from ..ops import drjit_ops
+
+    info = info if info is not None else registry.info(model_name)
+    alias = P.aliases_for(plugin, info)
+
+    def log(text):
+        mi.Log(mi.LogLevel.Debug, text)
+
+    class PlausibleBSDF(mi.BSDF):
+        INFO = info
+        ALIASES = alias
+        PLUGIN = plugin
+
+        #: properties read by a subclass itself (not model parameters)
+        EXTRA_PROPS: tuple = ()
+
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.state = ParamState(mi, plugin, info, props, alias, log,
+                                    make=self._model_factory(props), ignore=self.EXTRA_PROPS)
+            self._set_flags()
+
+        def _model_factory(self, props):
+            """``function(**params) -> model``; None: the registry's class."""
+            return None
+
+        def _set_flags(self):
+            self.m_flags = self.state.m_flags
+            self.m_components = [self.state.m_flags]
+            self.anisotropic = bool(self.state.m_flags & mi.BSDFFlags.Anisotropic)
+
+        @property
+        def model(self):
+            return self.state.model
+
+        # -- direction bookkeeping ---------------------------------------------------
+        @staticmethod
+        def _split(v):
+            return (v.x, v.y, v.z)
+
+        def _value(self, ctx, si, wo_c):
+            """``f(light, view) cos(theta_o)``; plausible's ``wi`` (light) is Mitsuba's
+            ``wo`` in Radiance mode and ``si.wi`` in Importance mode."""
+            ops = drjit_ops(mi.Float)
+            wi_c = self._split(si.wi)
+            light, view = (wi_c, wo_c) if ctx.mode == mi.TransportMode.Importance else (wo_c, wi_c)
+            f = self.model._f(ops, light, view, self.state.p(si))
+            f = mi.Spectrum(*f) if isinstance(f, tuple) else mi.Spectrum(f)
+            return f * dr.maximum(wo_c[2], 0.0)
+
+        # -- the BSDF interface ------------------------------------------------------
+        def eval(self, ctx, si, wo, active=True):
+            ok = active & (si.wi.z > 0) & (wo.z > 0)
+            return dr.select(ok, self._value(ctx, si, self._split(wo)), 0.0)
+
+        def pdf(self, ctx, si, wo, active=True):
+            ops = drjit_ops(mi.Float)
+            pdf = mi.Float(self.model._pdf(ops, self._split(si.wi), self._split(wo), self.state.q(si)))
+            ok = active & (si.wi.z > 0) & (wo.z > 0)
+            return dr.select(ok, pdf, 0.0)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            ops = drjit_ops(mi.Float)
+            q = self.state.q(si)
+            wi_c = self._split(si.wi)
+            wo_c = self.model._sample(ops, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q)
+            wo_c = vec.normalize(ops, tuple(mi.Float(c) for c in wo_c))
+            pdf = mi.Float(self.model._pdf(ops, wi_c, wo_c, q))
+            ok = active & (pdf > 0) & (wo_c[2] > 0) & (si.wi.z > 0)
+            bs = dr.zeros(mi.BSDFSample3f)
+            bs.wo = mi.Vector3f(*wo_c)
+            bs.pdf = dr.select(ok, pdf, 0.0)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(int(self.state.sampled_type))
+            bs.sampled_component = mi.UInt32(0)
+            value = self._value(ctx, si, wo_c)
+            return bs, dr.select(ok, value / dr.select(ok, pdf, 1.0), 0.0)
+
+        # -- parameters ---------------------------------------------------------------
+        def traverse(self, callback):
+            for k, tex in self.state.textures.items():
+                callback.put(k, tex, mi.ParamFlags.Differentiable)
+            for k, a in self.state.arrays.items():
+                if isinstance(a, (int, float)):
+                    continue  # a scalar variant: Mitsuba can only write Dr.Jit types
+                callback.put(k, a, self.state.flags[k])
+
+        def parameters_changed(self, keys=()):
+            self.state.changed(list(keys))
+            self._set_flags()
+
+        def to_string(self):
+            return f"{plugin}[plausible model {model_name!r}: {self.model!r}]"
+
+    PlausibleBSDF.__name__ = "Plausible_" + plugin
+    PlausibleBSDF.__qualname__ = PlausibleBSDF.__name__
+    return PlausibleBSDF
+
+
+def make_merl_class():
+    """The ``merl`` plugin: a measured BRDF in the MERL binary format
+    (:class:`plausible.fitting.merl.MerlBRDF`, nearest-cell lookup, cosine
+    sampling) read from ``<string name="filename" value="..."/>``.  RGB variants
+    only (the table holds red, green and blue)."""
+    import mitsuba as mi
+
+    from ..fitting.merl import MerlBRDF, read_merl
+    from ..params import ModelInfo
+
+    info = ModelInfo(name="merl", cls=MerlBRDF, params=(), reciprocal=True, energy_conserving=False,
+                     description="measured isotropic BRDF, MERL binary format (Matusik et al. 2003)",
+                     references=("Matusik, Pfister, Brand, McMillan, 'A data-driven reflectance "
+                                 "model', SIGGRAPH 2003",))
+    base = make_plugin_class("merl", "merl", info)
+
+    class MerlBSDF(base):
+        EXTRA_PROPS = ("filename",)
+
+        def _model_factory(self, props):
+            if "filename" not in props:
+                raise ValueError("merl: the parameter 'filename' (a MERL .binary file) is required")
+            if mi.is_spectral:
+                raise ValueError(f"merl: a MERL table holds RGB values; use an RGB variant, "
+                                 f"not {mi.variant()!r}")
+            model = read_merl(str(props["filename"]))
+            return lambda **params: model
+
+        def to_string(self):
+            return f"merl[{self.model.source!r}]"
+
+    MerlBSDF.__name__ = MerlBSDF.__qualname__ = "Plausible_merl"
+    return MerlBSDF
+
+
+__all__ = ["make_plugin_class", "make_merl_class", "bsdf_flags", "array_safe", "traversable", "untraverse",
+           "channel_mean", "ParamState"]

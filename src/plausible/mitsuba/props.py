@@ -1,0 +1,349 @@
+"""Mitsuba plugin properties -> model parameters, one function per kind.
+
+A plugin's ``Properties`` hold what the scene gave: numbers, strings, colours,
+Mitsuba textures.  This module turns them into what a model takes, and checks
+textures as fully as their data allows:
+
+* :func:`given_names` -- which parameter each property sets (aliases resolved,
+  unknown and repeated names refused);
+* one reader per kind: :func:`read_model_spec`, :func:`read_structured`,
+  :func:`read_choice`, :func:`read_number`, :func:`read_texture`; and
+  :func:`read_param` that picks one; :func:`metal_textures` for ``material=``;
+* textures: :func:`texture_texels` (every value a bitmap / checkerboard /
+  constant texture can take, read from ``mi.traverse``), :func:`check_texture`
+  (the parameter's range against the smallest and largest texel) and
+  :func:`check_pointwise` (cross-parameter constraints, e.g. Modified Phong's
+  ``kd + ks <= 1``, at every point of a UV grid).  A texture whose values cannot
+  be read (a procedural or spectral texture) is clamped to the parameter's
+  range per shading point instead (:func:`texture_range_known` says which).
+
+Every function here takes Mitsuba's module as ``mi`` only where it needs it, so
+that the parts that do not render can be read and tested alone.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..params import parse_groups
+
+#: Mitsuba-style parameter names accepted by every plugin whose model has one of
+#: the candidate parameters (first candidate present wins).
+COMMON_ALIASES = {
+    "diffuse_reflectance": ("kd", "rd"),
+    "specular_reflectance": ("ks", "rs"),
+    "exponent": ("n",),
+    "reflectance": ("rd", "kd", "ks", "rs"),
+}
+
+#: Per-plugin aliases (added to :data:`COMMON_ALIASES`).  Ward's ``alpha`` is
+#: Mitsuba's isotropic roughness: it sets ``alpha_x`` and ``alpha_y`` together
+#: (:data:`BOTH`).
+PLUGIN_ALIASES = {
+    "ashikhmin_shirley": {"specular_reflectance": ("rs",), "diffuse_reflectance": ("rd",)},
+    "ward": {"alpha_u": ("alpha_x",), "alpha_v": ("alpha_y",), "alpha": (("alpha_x", "alpha_y"),)},
+    "cook_torrance": {"alpha": ("m",), "roughness": ("m",)},
+}
+
+#: Texture classes whose every value is a texel of their data (bilinear
+#: interpolation stays within the texels' range): their range is checked at load.
+KNOWN_TEXTURES = ("BitmapTexture", "Checkerboard", "SRGBReflectanceSpectrum", "UniformSpectrum",
+                  "D65Spectrum")
+
+#: Largest number of distinct parameter combinations :func:`check_pointwise`
+#: builds a model for (beyond it, an evenly spread subset, and a warning).
+MAX_POINTS = 20000
+
+
+def aliases_for(plugin: str, info) -> dict:
+    """``{alias: parameter or tuple of parameters}`` of ``plugin`` (only aliases
+    whose targets all exist; a native name is never an alias)."""
+    names = [p.name for p in info.params]
+    table = dict(COMMON_ALIASES)
+    table.update(PLUGIN_ALIASES.get(plugin, {}))
+    out = {}
+    for alias, cands in table.items():
+        if alias in names:
+            continue
+        for c in cands:
+            if all(t in names for t in (c if isinstance(c, tuple) else (c,))):
+                out[alias] = c
+                break
+    return out
+
+
+def given_names(plugin: str, info, keys, alias: dict) -> dict:
+    """``{parameter: property key}`` for the property ``keys`` (``material`` aside).
+
+    Raises ValueError for an unknown name (listing the allowed ones) and for a
+    parameter set twice through aliases.
+    """
+    names = [p.name for p in info.params]
+    given = {}
+    for key in keys:
+        if key == "material":
+            continue
+        target = alias.get(key, key)
+        for t in (target if isinstance(target, tuple) else (target,)):
+            if t not in names:
+                raise ValueError(f"{plugin}: unknown parameter {key!r}; allowed: "
+                                 f"{', '.join(names + sorted(alias))}")
+            if t in given:
+                raise ValueError(f"{plugin}: parameter {t!r} given twice "
+                                 f"(as {given[t]!r} and {key!r}; aliases)")
+            given[t] = key
+    return given
+
+
+def check_material(plugin: str, info, keys) -> None:
+    """``material=`` needs a model with ``eta`` and ``k`` and excludes giving them."""
+    names = [p.name for p in info.params]
+    if not {"eta", "k"} <= set(names):
+        raise ValueError(f"{plugin}: 'material' needs a model with 'eta' and 'k' "
+                         f"parameters ({info.name} has {', '.join(names)})")
+    for clash in ("eta", "k"):
+        if clash in keys:
+            raise ValueError(f"{plugin}: give either 'material' or {clash!r}, not both")
+
+
+# -- one reader per kind ------------------------------------------------------------
+
+def read_model_spec(prm, raw, plugin):
+    """A nested model spec (pumped_up's ``base``): the model validates it."""
+    return raw
+
+
+def read_structured(prm, raw, plugin):
+    """A structured parameter (Lafortune's ``lobes``): a string of ``;``-separated
+    groups (:func:`plausible.params.parse_groups`) or a sequence, validated."""
+    return prm.validate(parse_groups(raw) if isinstance(raw, str) else raw, plugin)
+
+
+def read_choice(prm, raw, plugin):
+    """A ``choice`` parameter: a string, validated."""
+    return prm.validate(raw, plugin)
+
+
+def read_number(prm, raw, plugin):
+    """A plain number (scalar, or a grey colour): validated, a Python float (int)."""
+    return prm.validate(float(raw), plugin)
+
+
+def read_texture(mi, prm, props, key, raw):
+    """A colour or scalar given as a Mitsuba texture (``<rgb>``, ``bitmap``,
+    ``checkerboard``, ...) or as a list of numbers (an sRGB colour)."""
+    unbounded = bool(prm.hi > 1.0)
+    if prm.kind == "color" and not isinstance(raw, mi.Object) and hasattr(raw, "__len__"):
+        return srgb(mi, raw, unbounded)
+    if prm.kind == "color" and not unbounded:
+        return props.get_texture(key)
+    return props.get_unbounded_texture(key)
+
+
+def srgb(mi, values, unbounded: bool):
+    """A constant ``srgb`` texture of three numbers."""
+    return mi.load_dict({"type": "srgb", "color": mi.ScalarColor3d(*[float(x) for x in values]),
+                         "unbounded": unbounded})
+
+
+def read_param(mi, prm, props, key, plugin):
+    """The value of one given parameter: a Python value or a Mitsuba texture."""
+    raw = props[key]
+    if prm.kind == "model":
+        return read_model_spec(prm, raw, plugin)
+    if prm.kind not in ("scalar", "color", "choice"):
+        return read_structured(prm, raw, plugin)
+    if prm.kind == "choice" or isinstance(raw, str):
+        return read_choice(prm, raw, plugin)
+    if isinstance(raw, (int, float)) and not isinstance(raw, bool):
+        return read_number(prm, raw, plugin)
+    return read_texture(mi, prm, props, key, raw)
+
+
+def metal_textures(mi, material: str) -> dict:
+    """``{"eta": texture, "k": texture}`` of a metal from :mod:`plausible.spectra`.
+
+    Spectral variants: Mitsuba ``irregular`` spectra on the table's wavelengths
+    (the Fresnel term then varies per sampled wavelength).  RGB variants: the
+    D65-weighted linear sRGB reduction of ``n(lambda)`` and ``k(lambda)``
+    (:func:`plausible.spectra.spectrum_to_xyz`, :func:`xyz_to_linear_srgb`).
+    """
+    from .. import spectra
+
+    wl = np.arange(360.0, 831.0, 5.0)
+    n, k = spectra.metal_nk(material, wl)
+    out = {}
+    for name, vals in (("eta", n), ("k", k)):
+        if mi.is_spectral:
+            out[name] = mi.load_dict({"type": "irregular",
+                                      "wavelengths": ", ".join(f"{x:g}" for x in wl),
+                                      "values": ", ".join(f"{x:.6g}" for x in vals)})
+        else:
+            out[name] = srgb(mi, spectra.xyz_to_linear_srgb(spectra.spectrum_to_xyz(wl, vals)), True)
+    return out
+
+
+# -- textures: what values they can take ------------------------------------------------
+
+def texture_class(tex) -> str:
+    """Mitsuba's class name of a texture (``BitmapTexture``, ``Checkerboard``, ...);
+    ``""`` for a texture that cannot print itself (a Python texture without
+    ``to_string``)."""
+    try:
+        return repr(tex).split("[", 1)[0].strip()
+    except RuntimeError:
+        return ""
+
+
+def texture_texels(mi, tex):
+    """Every value ``tex.eval`` can return, as rows ``(k, channels)`` of float64,
+    or None where that cannot be known.
+
+    Known: constant colours, bitmaps (``data``; bilinear interpolation stays in
+    the texels' range) and checkerboards of those (``color0``/``color1``), in
+    RGB and monochrome variants.  Not known: every other texture (procedural,
+    mesh attributes, nested checkerboards) and spectral variants (a texture
+    holds spectral coefficients there, not reflectances).
+    """
+    if mi.is_spectral or texture_class(tex) not in KNOWN_TEXTURES:
+        return None
+    params = mi.traverse(tex)
+    rows = []
+    for key in params.keys():
+        leaf = key.split(".")[-1]
+        if leaf == "to_uv":
+            continue
+        if leaf not in ("data", "value") or key.count(".") > 1 or \
+                (key.count(".") == 1 and key.split(".")[0] not in ("color0", "color1")):
+            return None
+        a = np.array(params[key], dtype=np.float64)
+        if leaf == "data":          # TensorXf (height, width, channels)
+            rows.append(a.reshape(-1, a.shape[-1]))
+        else:                       # Color3f (3, 1) or Float (1,)
+            rows.append(a.reshape(1, -1))
+    if not rows:
+        return None
+    width = max(r.shape[1] for r in rows)
+    return np.concatenate([np.broadcast_to(r, (len(r), width)) if r.shape[1] == 1 else r
+                           for r in rows])
+
+
+def texture_range_known(mi, tex) -> bool:
+    """Can the texture's values be read at load (:func:`texture_texels`)?"""
+    return texture_texels(mi, tex) is not None
+
+
+def check_texture(mi, plugin: str, prm, tex) -> bool:
+    """Check the smallest and largest value of ``tex`` against ``prm``'s range.
+
+    A scalar parameter reads the channel mean of a texel (as the plugin does at
+    a shading point).  Returns False (nothing checked) where the texels cannot
+    be known; raises ValueError naming the plugin, the parameter, the range and
+    the offending texel value otherwise.
+    """
+    texels = texture_texels(mi, tex)
+    if texels is None:
+        return False
+    vals = texels.mean(axis=1) if prm.kind != "color" else texels.ravel()
+    bad = ~np.isfinite(vals) | (vals < prm.lo) | (vals > prm.hi)
+    if np.any(bad):
+        v = vals[bad]
+        worst = float(v[np.argmax(np.where(np.isfinite(v), np.abs(v), np.inf))])
+        raise ValueError(f"{plugin}: parameter '{prm.name}' must lie in {prm.range_text()}, got "
+                         f"{worst:g} in its {texture_class(tex)} texture "
+                         f"({int(bad.sum())} of {bad.size} texel values outside)")
+    return True
+
+
+def uv_grid(mi, textures) -> np.ndarray:
+    """UV points ``(m, 2)`` at which :func:`check_pointwise` compares textures:
+    the texel centres of the finest bitmap (at least 64 x 64, at most 512 x 512)."""
+    res = 32
+    for tex in textures:
+        for key in mi.traverse(tex).keys():
+            if key.split(".")[-1] == "data":
+                res = max(res, *np.array(mi.traverse(tex)[key]).shape[:2])
+    res = min(2 * res, 512)
+    c = (np.arange(res) + 0.5) / res
+    u, v = np.meshgrid(c, c, indexing="xy")
+    return np.stack([u.ravel(), v.ravel()], -1)
+
+
+def eval_at_uv(mi, tex, uv: np.ndarray) -> np.ndarray:
+    """``tex.eval`` at the UV points ``uv`` ``(m, 2)``: array ``(m, channels)``."""
+    import drjit as dr
+
+    si = dr.zeros(mi.SurfaceInteraction3f, len(uv))
+    si.uv = mi.Point2f(np.ascontiguousarray(uv.T, dtype=np.float32))
+    return np.array(tex.eval(si), dtype=np.float64).T
+
+
+class PointValues(NamedTuple):
+    """Parameter values at UV points, for :func:`check_pointwise`."""
+
+    uv: np.ndarray        # (m, 2)
+    values: dict          # name -> (m,) scalar or (m, channels) colour
+
+
+def values_at_uv(mi, info, textures: dict, uv) -> PointValues:
+    """Each textured parameter at the points ``uv`` (scalars: channel mean)."""
+    vals = {}
+    for name, tex in textures.items():
+        v = eval_at_uv(mi, tex, uv)
+        vals[name] = v.mean(axis=1) if info.param(name).kind != "color" else v
+    return PointValues(uv, vals)
+
+
+def check_pointwise(plugin: str, info, constants: dict, points: PointValues, warn=None) -> int:
+    """Cross-parameter constraints at every point: build the model (the NumPy
+    one, whose constructor checks them) for each distinct combination of the
+    textured values at the points with the constant ``constants``.
+
+    Only for models with constraints between parameters (a ``_validate``
+    of their own); more than :data:`MAX_POINTS` distinct combinations are
+    thinned to an evenly spread subset (``warn`` is told).  Raises ValueError
+    naming the plugin, the UV point and the values there.  Returns the number of
+    combinations checked.
+    """
+    from ..bxdf import BxDF
+
+    if info.cls._validate is BxDF._validate:
+        return 0
+    names = list(points.values)
+    cols = [np.asarray(points.values[n]).reshape(len(points.uv), -1) for n in names]
+    table = np.concatenate(cols, axis=1)
+    _, first = np.unique(table, axis=0, return_index=True)
+    first = np.sort(first)
+    if len(first) > MAX_POINTS:
+        if warn is not None:
+            warn(f"{plugin}: {len(first)} distinct texture combinations; cross-parameter "
+                 f"constraints checked at {MAX_POINTS} of them")
+        first = first[np.linspace(0, len(first) - 1, MAX_POINTS).astype(int)]
+    for i in first:
+        params = dict(constants)
+        for n in names:
+            v = np.asarray(points.values[n])[i]
+            params[n] = float(v) if np.ndim(v) == 0 else v
+        try:
+            info.cls(**params)
+        except ValueError as err:
+            u, v = points.uv[i]
+            shown = ", ".join(f"{n}={_show(params[n])}" for n in names)
+            raise ValueError(f"{plugin}: textured parameters break a constraint at uv = "
+                             f"({u:.4g}, {v:.4g}) where {shown}: {err}") from None
+    return len(first)
+
+
+def _show(v) -> str:
+    if isinstance(v, np.ndarray):
+        return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+    return f"{v:.4g}"
+
+
+__all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", "given_names",
+           "check_material", "read_param", "read_model_spec", "read_structured", "read_choice",
+           "read_number", "read_texture", "metal_textures", "texture_texels",
+           "texture_range_known", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",
+           "PointValues"]
