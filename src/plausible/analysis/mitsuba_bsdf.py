@@ -166,7 +166,7 @@ class MitsubaBSDF:
         self.transmission_components += mixed
         if not self.smooth_components and not self.delta_components:
             raise ValueError(f"{self.plugin}: not a reflective BSDF (component flags "
-                             f"{[str(mi.BSDFFlags(c)) for c in comps]}): nothing to check on the reflection "
+                             f"{[_flag_names(mi, c) for c in comps]}): nothing to check on the reflection "
                              "hemisphere")
         back = int(mi.BSDFFlags.BackSide)
         self.has_back = any(c & back and c & (smooth | delta) for c in comps)
@@ -368,6 +368,14 @@ class MitsubaBSDF:
             "energy+delta", w["total"] <= 1 + 1e-4, w["total"], "<= 1 + 0.0001 (smooth albedo + delta reflectance)",
             dict(theta_i_deg=w["theta_deg"], phi_i_deg=w["phi_deg"], smooth=w["smooth"], delta=w["delta"]),
             dict(grid=rows)))
+
+
+def _flag_names(mi, bits: int) -> str:
+    """``'DiffuseReflection|FrontSide'`` for the single-bit BSDFFlags set in ``bits``."""
+    names = [k for k in ("Null", "DiffuseReflection", "DiffuseTransmission", "GlossyReflection", "GlossyTransmission",
+                         "DeltaReflection", "DeltaTransmission", "Anisotropic", "SpatiallyVarying", "NonSymmetric",
+                         "FrontSide", "BackSide") if bits & int(getattr(mi.BSDFFlags, k))]
+    return "|".join(names) or "none"
 
 
 def _same(a, b, precision, n: int = 256) -> bool:
