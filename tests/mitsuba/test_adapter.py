@@ -11,6 +11,7 @@ from mi_helpers import dr, mi  # noqa: F401  (sets the variant)
 
 import plausible
 from plausible.analysis import chi2, direction, energy, reciprocity, sampling_consistency
+from plausible.analysis.adapters import tolerances
 from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict, load_bsdf_xml
 from plausible.fresnel import dielectric
 from plausible.ops import NP
@@ -92,7 +93,7 @@ def test_correct_python_bsdf_passes_with_closed_form_albedo():
 
 def test_python_bsdf_with_scaled_pdf_fails_sampling_and_chi2():
     b = load(PdfScaled)
-    s = sampling_consistency(b, thetas_deg=(30,), n_samples=20_000, tol=1e-4)
+    s = sampling_consistency(b, thetas_deg=(30,), n_samples=20_000, tol=tolerances(b)["sampling"])
     assert not s.passed and s.figure == pytest.approx(0.1, rel=1e-4)   # pdf(wi, sampled wo) vs bs.pdf
     assert s.details["max_pdf_integral"] == pytest.approx(1.1, abs=1e-4)
     assert not chi2(b, direction(0.5), n_samples=20_000).passed
@@ -104,7 +105,8 @@ def test_python_bsdf_gaining_energy_fails_energy():
 
 
 def test_asymmetric_python_bsdf_fails_reciprocity():
-    r = reciprocity(load(Asymmetric), tol=1e-5)
+    b = load(Asymmetric)
+    r = reciprocity(b, tol=tolerances(b)["reciprocity"])
     assert not r.passed and 0.3 < r.figure <= 0.6 / 1.3 + 1e-6
 
 
@@ -113,7 +115,7 @@ def test_builtin_diffuse_albedo_and_float32_reciprocity():
     a = plausible.albedo(b, direction(math.radians(40)))
     np.testing.assert_allclose(a.value, [0.2, 0.5, 0.8], atol=1e-6)
     r = reciprocity(b, tol=b.precision)
-    assert r.passed and r.figure < 1e-6   # float32: a few units of 2^-24
+    assert r.passed and r.figure < 1e-6   # a smooth lobe in float32: a few units of 2^-24
 
 
 def test_eval_divides_mitsubas_cosine_and_maps_si_wi():
@@ -135,6 +137,7 @@ def test_eval_divides_mitsubas_cosine_and_maps_si_wi():
     assert [lb for lb, _ in b.views()] == ["importance"]
 
 
+@pytest.mark.slow
 def test_non_reciprocal_plugin_is_checked_in_both_modes():
     import plausible.mitsuba as pm
 
@@ -165,7 +168,7 @@ def test_conductor_is_pure_delta_all_checks_not_applicable():
 def test_transmission_is_excluded_and_said():
     b = MitsubaBSDF(load_bsdf_dict({"type": "roughdielectric", "alpha": 0.3}))
     assert b.transmission_components and any("NOT checked" in n for n in b.notes)
-    s = sampling_consistency(b, thetas_deg=(30,), n_samples=20_000, tol=1e-4)
+    s = sampling_consistency(b, thetas_deg=(30,), n_samples=20_000, tol=tolerances(b)["sampling"])
     assert s.passed, s.worst   # reflection-only sampling, consistent with the masked pdf
 
 

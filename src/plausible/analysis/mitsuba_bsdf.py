@@ -33,11 +33,20 @@ Conventions, Mitsuba 3 to :mod:`plausible.bxdf`:
   back gives the same values as the front.
 * **Precision.**  The RGB and mono LLVM/CUDA variants compute in float32 (no
   double-precision variant is installed with the ``mitsuba`` wheels), so one
-  ``eval`` is good to about ``1e-6`` relative (``2^-24 = 6e-8`` per operation,
-  tens of operations); the adapter declares ``precision = 1e-5`` and
-  :func:`plausible.analysis.adapters.tolerances` derives reciprocity
-  ``<= 1e-5`` and sampling ``<= 1e-4`` from it.  Every integral is summed in
-  float64.  Spectral and polarized variants are refused (their values depend on
+  ``eval`` of a smooth lobe is good to about ``1e-7`` relative (``2^-24 = 6e-8``
+  per operation; measured asymmetry of ``diffuse`` and ``roughconductor``:
+  1.1e-7), but a direction is itself rounded to float32, and a sharp lobe's value
+  moves by much more over one ulp of its direction: the sampler of
+  ``roughconductor`` (alpha 0.01) at 89 degrees reports a pdf 3.3e-4 away from
+  ``pdf()`` at the direction it returned (it computes the pdf from the microfacet
+  normal, ``pdf()`` from the half vector of the rounded direction), and
+  ``principled`` is asymmetric by 2.1e-5 at grazing.  The adapter declares
+  ``precision = 1e-4``; :func:`plausible.analysis.adapters.tolerances` derives
+  reciprocity ``<= 1e-4`` and sampling ``<= 1e-3`` from it (a deliberate defect,
+  a pdf 10% off or an asymmetric lobe, is 100 times larger).  Every integral is
+  summed in float64.  Directions returned by Mitsuba's sampler are kept as
+  float32 gave them (not renormalised), so that ``pdf(wi, wo)`` of a sampled
+  ``wo`` sees the same bits.  Spectral and polarized variants are refused (their values depend on
   the sampled wavelengths, or are Mueller matrices); use ``llvm_ad_rgb``.
 """
 
@@ -47,12 +56,16 @@ import math
 
 import numpy as np
 
-from ..bxdf import CHUNK, HORIZON, Sample, _as_unit_interval, as_directions
+from ..bxdf import CHUNK, HORIZON, Sample, _as_array, _as_unit_interval, _check_directions
 
 __all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml", "ensure_variant"]
 
-#: Relative precision declared for a float32 Mitsuba variant (see the module docstring).
-FLOAT32_PRECISION = 1e-5
+#: Relative precision declared for a float32 Mitsuba variant (see the module docstring):
+#: float32 rounds a direction by 2^-24 relative, and a sharp lobe's value moves by far more
+#: than that over one ulp (the pdf of roughconductor alpha 0.01 at 89 degrees: the sampler's
+#: pdf and pdf() at the sampled direction differ by 3.3e-4; principled's f(a, b) and f(b, a)
+#: by 2.1e-5 at grazing).
+FLOAT32_PRECISION = 1e-4
 
 #: The variant set when none is: LLVM, RGB, float32 (the only precision installed).
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -236,8 +249,8 @@ class MitsubaBSDF:
 
     # -- the contract --------------------------------------------------------------------------
     def _pairs(self, wi, wo):
-        wi = as_directions("wi", wi)
-        wo = as_directions("wo", wo)
+        wi = _as_float32_directions("wi", wi)
+        wo = _as_float32_directions("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         return (np.broadcast_to(wi, shape + (3,)).reshape(-1, 3), np.broadcast_to(wo, shape + (3,)).reshape(-1, 3),
                 shape)
@@ -261,7 +274,7 @@ class MitsubaBSDF:
 
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
-        wi = as_directions("wi", wi)
+        wi = _as_float32_directions("wi", wi)
         u = _as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         a = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
@@ -279,9 +292,12 @@ class MitsubaBSDF:
             o = np.asarray(bs.wo.numpy(), dtype=np.float64).reshape(3, -1).T
             if self.side == "back":
                 o[:, 2] = -o[:, 2]
+            # Mitsuba's float32 direction as it is (|wo| = 1 +- 1e-7): renormalising it in float64
+            # would move it by up to an ulp when it is rounded again, and the pdf of a sharp lobe
+            # (alpha 0.01 at 89 degrees) changes by 1e-3 over one ulp
             nrm = np.linalg.norm(o, axis=-1)
             good = np.isfinite(nrm) & (nrm > 0)
-            o = np.where(good[:, None], o / np.where(good, nrm, 1.0)[:, None], np.array([0.0, 0.0, -1.0]))
+            o = np.where(good[:, None], _unit32(o, nrm), np.array([0.0, 0.0, -1.0]))
             p = np.asarray(bs.pdf.numpy(), dtype=np.float64)
             ww = self._spectrum(w, e - s)
             ok = good & (o[:, 2] > HORIZON) & (a[s:e, 2] > HORIZON) & (p > 0)
@@ -312,7 +328,9 @@ class MitsubaBSDF:
             out.append(("importance", imp))
         if self.has_back:
             back = self.with_(side="back")
-            if not _same(self, back, self.precision):
+            if not _reflects(back):
+                self.notes.append("back side: declared, but eval is 0 there (nothing reflected): not checked")
+            elif not _same(self, back, self.precision):
                 out.append(("back", back))
                 imp_b = back.with_(mode="importance")
                 if not _same(back, imp_b, self.precision):
@@ -370,6 +388,26 @@ class MitsubaBSDF:
             dict(grid=rows)))
 
 
+#: Directions whose length is within this of 1 are passed to Mitsuba as they are (rounded
+#: to float32), not renormalised: float32 cannot tell them from unit vectors (2^-22).
+UNIT_SLACK = 2.0 ** -20
+
+
+def _unit32(w, nrm):
+    """``w / |w|`` except where ``|w|`` is within :data:`UNIT_SLACK` of 1 (then ``w``)."""
+    near = np.abs(nrm - 1.0) <= UNIT_SLACK
+    return np.where(near[..., None], w, w / np.where(nrm > 0, nrm, 1.0)[..., None])
+
+
+def _as_float32_directions(name, w):
+    """Validated directions (as :func:`plausible.bxdf.as_directions`), normalised only
+    where they are not unit vectors to float32 precision: a direction the adapter
+    returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
+    a = _as_array(name, w)
+    _check_directions(name, a)
+    return _unit32(a, np.sqrt(np.sum(a * a, axis=-1)))
+
+
 def _flag_names(mi, bits: int) -> str:
     """``'DiffuseReflection|FrontSide'`` for the single-bit BSDFFlags set in ``bits``."""
     names = [k for k in ("Null", "DiffuseReflection", "DiffuseTransmission", "GlossyReflection", "GlossyTransmission",
@@ -378,10 +416,20 @@ def _flag_names(mi, bits: int) -> str:
     return "|".join(names) or "none"
 
 
-def _same(a, b, precision, n: int = 256) -> bool:
+def _probe_pairs(n: int = 256):
     rng = np.random.default_rng(5)
     d = rng.normal(size=(2, n, 3))
     d[..., 2] = np.abs(d[..., 2]) + 0.05
+    return d
+
+
+def _reflects(a) -> bool:
+    d = _probe_pairs()
+    return bool(np.any(a.eval(d[0], d[1]) != 0))
+
+
+def _same(a, b, precision) -> bool:
+    d = _probe_pairs()
     fa, fb = a.eval(d[0], d[1]), b.eval(d[0], d[1])
     scale = np.maximum(np.abs(fa), np.abs(fb))
     return bool(np.all(np.abs(fa - fb) <= 10 * precision * scale + 1e-12 * (np.max(scale) + 1e-300)))
