@@ -166,7 +166,7 @@ class MitsubaBSDF:
             raise ValueError(f"Mitsuba variant {mi.variant()} is spectral or polarized: the checks need "
                              f"RGB or mono values; set {DEFAULT_VARIANT} before loading the BSDF")
         self.mode, self.side, self.uv = mode, side, tuple(float(x) for x in uv)
-        self.plugin = name or str(bsdf).split("[", 1)[0].strip() or type(bsdf).__name__
+        self.plugin = name or str(bsdf).splitlines()[0].split("[", 1)[0].strip(" :") or type(bsdf).__name__
         self.params = dict(params) if params is not None else _traverse_params(mi, bsdf)
         self.precision = FLOAT32_PRECISION   # every installed variant is float32, scalar_rgb too
         comps, smooth, delta, trans = _flags(mi, bsdf)
