@@ -1,15 +1,18 @@
 """Analysis: albedo, reciprocity, energy, sampling consistency, chi-square, check.
 
 Everything here uses only the model contract (``eval``, ``pdf``, ``sample``
-and the optional ``peak_directions`` hint), so it works for any model.
+and the optional ``peak_directions`` hint), so it works for any model; the
+adapters (:mod:`.adapters`, :mod:`.mitsuba_bsdf`) bring Mitsuba BSDFs and plain
+callables to that contract.
 """
 
+from .adapters import CallableBxDF, as_bxdf
 from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, direction, hemispherical_albedo, is_isotropic,
                      pdf_integral)
 from .checks import PropertyResult, energy, reciprocity, sampling_consistency
 from .chi2 import Chi2Result, chi2, sidak
 from .report import CheckReport, check
 
-__all__ = ["AlbedoResult", "CheckReport", "Chi2Result", "PropertyResult", "albedo", "albedo_curve", "albedo_table", "check",
+__all__ = ["AlbedoResult", "CallableBxDF", "as_bxdf", "CheckReport", "Chi2Result", "PropertyResult", "albedo", "albedo_curve", "albedo_table", "check",
            "chi2", "direction", "energy", "hemispherical_albedo", "is_isotropic", "pdf_integral",
            "reciprocity", "sampling_consistency", "sidak"]

@@ -165,10 +165,13 @@ class CallableBxDF:
 
     def __init__(self, f, pdf=None, sample=None, *, name: str | None = None, params: dict | None = None,
                  peaks=None):
-        fn = f.eval if not callable(f) or (not inspect.isroutine(f) and callable(getattr(f, "eval", None))) \
-            else f
-        if not callable(fn):
-            raise TypeError(f"f must be a callable f(wi, wo), got {type(f).__name__}")
+        if callable(getattr(f, "eval", None)) and not inspect.isroutine(f):
+            fn = f.eval   # an object with eval (and perhaps pdf, sample) methods
+        elif callable(f):
+            fn = f
+        else:
+            raise TypeError(f"f must be a callable f(wi, wo) or an object with an eval method, "
+                            f"got {type(f).__name__}")
         self._f = fn
         self._pdf = pdf if pdf is not None else getattr(f, "pdf", None)
         self._sample = sample if sample is not None else getattr(f, "sample", None)
