@@ -215,14 +215,21 @@ def plot_reciprocity(rows, tol: float):
 
 
 def plot_albedo(rows):
-    """Directional albedo against incidence (the energy grid at azimuth 0) of each configuration."""
+    """Directional albedo against incidence (the energy grid at azimuth 0) of each configuration;
+    with delta lobes, the smooth albedo plus their reflectance (dashed)."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = plt.subplots(figsize=(9, 6))
     for r in rows:
-        g = [x for x in r.report["results"] if x["name"] == "energy"][0]["details"].get("grid", [])
+        res = {x["name"]: x for x in r.report["results"]}
+        if "energy+delta" in res:   # the whole reflectance: smooth albedo + delta lobes
+            g = [dict(x, albedo=x["total"]) for x in res["energy+delta"]["details"]["grid"]]
+        else:
+            g = res["energy"]["details"].get("grid", [])
         g = [x for x in g if x["phi_deg"] == 0]
-        ax.plot([x["theta_deg"] for x in g], [x["albedo"] for x in g], lw=1, label=r.label)
+        ax.plot([x["theta_deg"] for x in g], [x["albedo"] for x in g], lw=1,
+                ls="--" if "energy+delta" in res else "-",
+                label=r.label + (" (smooth + delta)" if "energy+delta" in res else ""))
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_xlabel("incidence theta (deg)")
     ax.set_ylabel("directional albedo (max channel)")
