@@ -55,7 +55,8 @@ def test_callable_wrapping_a_model_gives_the_models_figures():
     c = CallableBxDF(m.eval, m.pdf, m.sample, name="wrapped")
     wi = direction(math.radians(60))
     assert float(plausible.albedo(c, wi)) == pytest.approx(float(plausible.albedo(m, wi)), abs=1e-12)
-    s1, s2 = m.sample(wi, np.random.default_rng(0).random((100, 3))), c.sample(wi, np.random.default_rng(0).random((100, 3)))
+    u = np.random.default_rng(0).random((100, 3))
+    s1, s2 = m.sample(wi, u), c.sample(wi, u)
     np.testing.assert_allclose(s2.weight, s1.weight, rtol=1e-12)
     np.testing.assert_allclose(s2.pdf, s1.pdf, rtol=1e-12)
 
