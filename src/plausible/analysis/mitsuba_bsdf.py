@@ -174,9 +174,7 @@ class MitsubaBSDF:
         has = lambda bits: [i for i, c in enumerate(comps) if c & bits]  # noqa: E731
         self.smooth_components = has(smooth) if self.declares_flags else [0]
         self.delta_components = has(delta)
-        self.transmission_components = [i for i in has(trans) if not comps[i] & (smooth | delta)]
-        mixed = [i for i in has(trans) if comps[i] & (smooth | delta)]
-        self.transmission_components += mixed
+        self.transmission_components = has(trans)
         if not self.smooth_components and not self.delta_components:
             raise ValueError(f"{self.plugin}: not a reflective BSDF (component flags "
                              f"{[_flag_names(mi, c) for c in comps]}): nothing to check on the reflection "
@@ -190,7 +188,10 @@ class MitsubaBSDF:
             why = "only delta lobes: nothing to integrate (their reflectance is reported as energy+delta)"
             self.not_applicable = dict(reciprocity=why, energy=why, sampling=why, chi2=why)
         self.notes = self._notes(comps)
-        if self.declares_flags:   # the declared anisotropy; is_isotropic's probe is at float64 precision
+        # the declared anisotropy (is_isotropic's probe compares at float64 precision, and float32
+        # rounding would make every plugin look anisotropic); a plugin that hides its anisotropy
+        # is checked at azimuth 0 only
+        if self.declares_flags:
             self.isotropic = not int(bsdf.flags()) & int(mi.BSDFFlags.Anisotropic)
 
     @property
