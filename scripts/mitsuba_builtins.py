@@ -131,7 +131,7 @@ def main(argv=None):
                 for d in json.loads(Path(a.json).read_text())]
     else:
         rows = builtin_table(configs, quick=a.quick, spp=a.spp, progress=progress)
-        Path(a.json).write_text(json.dumps([asdict(r) for r in rows], indent=1))
+        Path(a.json).write_text(json.dumps([asdict(r) for r in rows], separators=(",", ":")) + "\n")
     tol = tolerances(type("P", (), dict(precision=FLOAT32_PRECISION))())
     text = INTRO.format(mode="quick checks" if a.quick else "full checks", version=mi.__version__,
                         variant=mi.variant(), rec=tol["reciprocity"], samp=tol["sampling"], theta=FURNACE_THETA)
