@@ -8,7 +8,7 @@ STAMP    := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12
 OUT      ?= out
 JOBS     ?= 2
 
-.PHONY: demo test test-all bench setup llvm chromium clean
+.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium clean
 
 setup: $(STAMP) llvm chromium
 
@@ -49,6 +49,10 @@ bench: setup
 	mkdir -p $(OUT)
 	$(BIN)/python -m pytest -q benchmarks --benchmark-only -p no:xdist --benchmark-json=$(OUT)/bench.json
 	$(BIN)/python benchmarks/report.py $(OUT)/bench.json > $(OUT)/benchmarks.md
+
+# docs/mitsuba-builtins.md: Mitsuba 3's own BSDFs under plausible check (about 30 minutes on 2 cores).
+mitsuba-builtins: setup
+	$(BIN)/python scripts/mitsuba_builtins.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache

@@ -157,24 +157,36 @@ def eval_cmd(model, params, wi, wo):
 @click.option("--all", "all_models", is_flag=True,
               help="Check every registered model on its defaults and extreme parameters.")
 @click.option("--quick", is_flag=True, help="Fewer directions and samples.")
-def check(model, params, as_json, all_models, quick):
+@click.option("--mitsuba", "mitsuba_dict", metavar="JSON",
+              help='A Mitsuba 3 BSDF as mi.load_dict takes it, e.g. \'{"type": "roughconductor", "alpha": 0.2}\'.')
+@click.option("--mitsuba-xml", type=click.Path(exists=True, dir_okay=False), metavar="FILE",
+              help="A Mitsuba 3 XML file (a <bsdf> or a scene); --id names the BSDF.")
+@click.option("--id", "bsdf_id", metavar="NAME", help="The id of the BSDF in --mitsuba-xml.")
+@click.option("--python", "python_obj", metavar="MODULE:NAME",
+              help="A callable f(wi, wo) (optional .pdf and .sample), an object with eval/pdf/sample, "
+                   "or a mitsuba.BSDF, importable as package.module:name.")
+def check(model, params, as_json, all_models, quick, mitsuba_dict, mitsuba_xml, bsdf_id, python_obj):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
-    Exits with status 1 when a property fails.  With --all: every registered
-    model on its defaults and extremes, a model whose check raises is reported
-    and the others still run, a summary line ends the output, and the status
-    is 1 when a model fails a property it claims.
+    MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
+    --python (see docs/analysis.md).  Exits with status 1 when a property fails.
+    With --all: every registered model on its defaults and extremes, a model
+    whose check raises is reported and the others still run, a summary line
+    ends the output, and the status is 1 when a model fails a property it claims.
     """
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
-    if not model and not all_models:
-        _fail("give a MODEL or --all")
+    foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
+    if not model and not all_models and foreign is None:
+        _fail("give a MODEL, --all, --mitsuba, --mitsuba-xml or --python")
     if all_models and (model or params):
         _fail(f"--all checks every registered model on its own parameter sets; it takes no MODEL or -p "
               f"(got {' '.join([model or ''] + ['-p ' + p for p in params]).strip()!r})")
     if all_models:
         targets = [m for name in registry.names() for m in model_variants(name)]
+    elif foreign is not None:
+        targets = [foreign]
     else:
         targets = [_model(model, params)]
     reports, verdicts = [], []
@@ -213,14 +225,51 @@ def _fmt_params(ps):
     return "{" + ", ".join(f"{k}={_fmt(v)}" for k, v in ps.items()) + "}"
 
 
+def _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, other):
+    """The object of --mitsuba / --mitsuba-xml / --python as a contract (None if none given)."""
+    import json
+
+    from .analysis.adapters import as_bxdf, load_python
+
+    given = [o for o, v in (("--mitsuba", mitsuba_dict), ("--mitsuba-xml", mitsuba_xml),
+                            ("--python", python_obj)) if v]
+    if bsdf_id and not mitsuba_xml:
+        _fail("--id names a BSDF in --mitsuba-xml; give --mitsuba-xml FILE")
+    if not given:
+        return None
+    if len(given) > 1 or other:
+        _fail(f"give one of MODEL, --all, --mitsuba, --mitsuba-xml, --python (got {', '.join(given)}"
+              f"{' and a MODEL or --all' if other else ''})")
+    try:
+        if mitsuba_dict:
+            from .analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict
+
+            try:
+                d = json.loads(mitsuba_dict)
+            except json.JSONDecodeError as e:
+                _fail(f"--mitsuba must be a JSON object, e.g. '{{\"type\": \"diffuse\"}}': {e}")
+            return MitsubaBSDF(load_bsdf_dict(d), params={k: v for k, v in d.items() if k != "type"},
+                               name=d["type"])
+        if mitsuba_xml:
+            from .analysis.mitsuba_bsdf import load_bsdf_xml
+
+            return as_bxdf(load_bsdf_xml(mitsuba_xml, bsdf_id))
+        return as_bxdf(load_python(python_obj))
+    except (ValueError, TypeError, RuntimeError) as e:
+        _fail(str(e))
+
+
 def _print_report(rep):
     t = Table(title=escape(f"{rep.model} {rep.params}"), title_justify="left")
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
         style = "green" if row[3] == "PASS" else "red"
+        style = "yellow" if row[3] == "N/A" else style
         t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)
+    for n in rep.notes:
+        console.print(f"note: {escape(n)}")
 
 
 @main.command()

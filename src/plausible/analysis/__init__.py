@@ -1,15 +1,19 @@
 """Analysis: albedo, reciprocity, energy, sampling consistency, chi-square, check.
 
 Everything here uses only the model contract (``eval``, ``pdf``, ``sample``
-and the optional ``peak_directions`` hint), so it works for any model.
+and the optional ``peak_directions`` hint), so it works for any model; the
+adapters (:mod:`.adapters`, :mod:`.mitsuba_bsdf`) bring Mitsuba BSDFs and plain
+callables to that contract.
 """
 
+from .adapters import CallableBxDF, as_bxdf
 from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, direction, hemispherical_albedo, is_isotropic,
                      pdf_integral)
 from .checks import PropertyResult, energy, reciprocity, sampling_consistency
 from .chi2 import AdaptiveBinning, Chi2Result, FixedBinning, chi2, sidak
 from .report import CheckReport, check
 
-__all__ = ["AdaptiveBinning", "AlbedoResult", "CheckReport", "Chi2Result", "FixedBinning", "PropertyResult", "albedo",
-           "albedo_curve", "albedo_table", "check", "chi2", "direction", "energy", "hemispherical_albedo",
-           "is_isotropic", "pdf_integral", "reciprocity", "sampling_consistency", "sidak"]
+__all__ = ["AdaptiveBinning", "AlbedoResult", "CallableBxDF", "CheckReport", "Chi2Result", "FixedBinning",
+           "PropertyResult", "albedo", "albedo_curve", "albedo_table", "as_bxdf", "check", "chi2", "direction",
+           "energy", "hemispherical_albedo", "is_isotropic", "pdf_integral", "reciprocity", "sampling_consistency",
+           "sidak"]

@@ -6,6 +6,7 @@ import json
 import math
 from dataclasses import dataclass, field
 
+from .adapters import as_bxdf, tolerances
 from .albedo import direction, is_isotropic
 from ..progress import start, within
 from ..text import jsonable
@@ -25,6 +26,8 @@ class CheckReport:
     model: str
     params: dict
     results: list = field(default_factory=list)
+    #: What the checker could not check, or excluded, and why (adapters' notes).
+    notes: list = field(default_factory=list)
 
     @property
     def passed(self) -> bool:
@@ -38,7 +41,7 @@ class CheckReport:
 
     def to_dict(self):
         return jsonable(dict(model=self.model, params=self.params, passed=self.passed,
-                              results=[r.to_dict() for r in self.results]))
+                             results=[r.to_dict() for r in self.results], notes=self.notes))
 
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), **kw)
@@ -59,13 +62,26 @@ class CheckReport:
             worst = ", ".join(f"{k}={_short(v)}" for k, v in list(w.items())[:4])
             if r.worst.get("problems"):
                 worst = r.worst["problems"][0] + ("; " + worst if worst else "")
-            out.append((r.name, f"{r.figure:.6g}", r.bound, "PASS" if r.passed else "FAIL", worst))
+            verdict = "N/A" if not applicable(r) else "PASS" if r.passed else "FAIL"
+            out.append((r.name, f"{r.figure:.6g}", r.bound, verdict, worst))
         return out
 
     def __str__(self):
         lines = [f"check {self.model} {self.params}: {'PASS' if self.passed else 'FAIL'}"]
         lines += ["  " + " | ".join(r) for r in self.rows()]
+        lines += ["  note: " + n for n in self.notes]
         return "\n".join(lines)
+
+
+def applicable(result) -> bool:
+    """False for a check reported as not applicable (the object cannot do what it needs)."""
+    return result.details.get("applicable", True) is not False
+
+
+def not_applicable(name: str, reason: str) -> PropertyResult:
+    """A check that was not run: ``passed`` (it found nothing wrong), figure NaN, the reason as bound."""
+    return PropertyResult(name, True, math.nan, f"not applicable: {reason}", {}, dict(applicable=False,
+                                                                                      reason=reason))
 
 
 def _short(v):
@@ -80,6 +96,15 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
           progress=None) -> CheckReport:
     """Run reciprocity, energy, sampling consistency and chi-square on ``model``.
 
+    ``model``: a registered model, a model spec string (``"modified-phong:n=20"``),
+    a ``mitsuba.BSDF`` or a callable ``f(wi, wo)`` (with optional ``pdf`` and
+    ``sample``); :func:`plausible.analysis.adapters.as_bxdf` turns it into the
+    contract.  What the object cannot do is reported as not applicable, with the
+    reason; the adapter's tolerances (:func:`~plausible.analysis.adapters.tolerances`)
+    follow its declared precision; further views it declares (a renderer's
+    importance transport, a back side) are checked too, their results named
+    ``"reciprocity [importance]"`` and so on.
+
     The chi-square significance ``alpha`` is family-wise over the tests run here
     (Sidak).  Its default, 0.001, keeps the registry-wide test suite (hundreds
     of chi-square tests) free of chance failures; a broken sampler gives
@@ -87,21 +112,74 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     a :mod:`plausible.progress` factory, announced once with every step of every
     property and ticked after each.
     """
-    iso = is_isotropic(model)
+    model = as_bxdf(model)
+    views = [("", model)] + list(model.views() if hasattr(model, "views") else [])
+    rep = CheckReport(model.name, jsonable(model.params), notes=list(getattr(model, "notes", [])))
+    ticks = _split_progress(progress, len(views))
+    for label, m in views:
+        sub = _check_one(m, alpha=alpha, n_samples=n_samples, quick=quick, progress=ticks)
+        for r in sub.results:
+            r.name += f" [{label}]" if label else ""
+        rep.results += sub.results
+    if len(views) > 1:
+        rep.notes.append("checked separately (they differ): " + ", ".join(lb for lb, _ in views[1:]))
+    if hasattr(model, "annotate"):
+        model.annotate(rep)
+    return rep
+
+
+def _split_progress(progress, n_views):
+    """One announcement for all the views: the first view's total times ``n_views``
+    (views check the same grids), then its ticks serve every view."""
+    if n_views == 1:
+        return progress
+    state = {}
+
+    def factory(total, label=""):
+        if "tick" not in state:
+            state["tick"] = start(progress, total * n_views, label)
+        return state["tick"]
+
+    return factory
+
+
+def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
+    """The four checks of one contract (see :func:`check`)."""
+    skip = getattr(model, "not_applicable", {})
+    tol = tolerances(model)
+    iso = getattr(model, "isotropic", None)
+    iso = is_isotropic(model) if iso is None else iso
     chi_dirs = CHI2_DIRECTIONS if iso else CHI2_DIRECTIONS_ANISO
     thetas = (0, 30, 60, 80, 89.9) if quick else ENERGY_THETAS
-    e_dirs = energy_directions(model, thetas)
+    e_dirs = energy_directions(model, thetas, (0.0,) if iso else None)
     s_thetas = (0, 45, 85) if quick else (0, 30, 60, 80, 89)
     s_phis = (0,) if iso else (0, 45)
     n_s = 20_000 if quick else 50_000
     total = 1 + len(e_dirs) + len(s_thetas) * len(s_phis) + len(chi_dirs)
     tick = start(progress, total, f"check {model.name}")
     rep = CheckReport(model.name, jsonable(model.params))
-    rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24))
+    if "reciprocity" in skip:
+        rep.results.append(not_applicable("reciprocity", skip["reciprocity"]))
+    else:
+        rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24,
+                                       tol=tol["reciprocity"]))
     tick()
-    rep.results.append(energy(model, thetas_deg=thetas, progress=within(tick)))
-    rep.results.append(sampling_consistency(model, thetas_deg=s_thetas, phis_deg=s_phis,
-                                            n_samples=n_s, progress=within(tick)))
+    if "energy" in skip:
+        rep.results.append(not_applicable("energy", skip["energy"]))
+        tick(len(e_dirs))
+    else:
+        rep.results.append(energy(model, thetas_deg=thetas, phis_deg=(0.0,) if iso else None,
+                                  progress=within(tick)))
+    if "sampling" in skip:
+        rep.results.append(not_applicable("sampling", skip["sampling"]))
+        tick(len(s_thetas) * len(s_phis))
+    else:
+        rep.results.append(sampling_consistency(model, thetas_deg=s_thetas, phis_deg=s_phis, n_samples=n_s,
+                                                tol=tol["sampling"], progress=within(tick)))
+    if "chi2" in skip:
+        rep.results.append(not_applicable("chi2", skip["chi2"]))
+        tick(len(chi_dirs))
+        return rep
     results = []
     for k, (t, p) in enumerate(chi_dirs):
         r = chi2(model, direction(math.radians(t), math.radians(p)), alpha=alpha, seed=k,

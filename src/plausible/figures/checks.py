@@ -53,3 +53,37 @@ def checks(ctx, variants):
         rows = "; ".join(f"{x[0]} {x[3]} {x[1]}" for x in r.rows())
         ctx.measure(f"{m.name} {r.params}: agrees with its claims", float(r.as_claimed(m.info)), 1.0, 0.0,
                     note=rows)
+
+
+#: Configurations of the ``mitsuba-builtins`` figure in quick (CI) mode.
+QUICK_BUILTINS = ("diffuse", "plastic")
+
+
+@figure("mitsuba-builtins", "Mitsuba 3's own reflection BSDFs: reciprocity, energy, sampling, chi-square",
+        "plausible (issue 15); Mitsuba 3 plugins", "plausible.check on Mitsuba 3's built-in reflection BSDFs through "
+        "the Mitsuba adapter (float32, llvm_ad_rgb): which are plausible, which lose energy and how much, which are "
+        "not reciprocal, whether a sampler disagrees with its pdf. One number per configuration (the albedo at 60 "
+        "degrees) is cross-checked against a Monte-Carlo furnace render in Mitsuba itself. The full table: "
+        "docs/mitsuba-builtins.md.", renders=True,
+        variants="diffuse, roughconductor (Beckmann/GGX, alpha 0.01-1, iso/aniso, sample_visible on/off), "
+                 "roughplastic, plastic, principled, pplastic, blendbsdf (quick mode: " + ", ".join(QUICK_BUILTINS)
+                 + ")")
+def mitsuba_builtins(ctx, variants):
+    from plausible.analysis.adapters import tolerances
+    from plausible.analysis.mitsuba_bsdf import FLOAT32_PRECISION
+
+    from .mitsuba_builtins import CONFIGS, builtin_markdown, builtin_table, plot_albedo, plot_reciprocity
+
+    configs = [c for c in CONFIGS if c[0] in QUICK_BUILTINS] if ctx.quick else CONFIGS
+    ctx.steps(len(configs))
+    rows = builtin_table(configs, quick=ctx.quick, spp=ctx.spp(2), progress=lambda total: ctx.tick)
+    (ctx.out / "mitsuba-builtins.md").write_text(builtin_markdown(rows))
+    ctx.file("mitsuba-builtins.md", "the table (as docs/mitsuba-builtins.md)")
+    tol = tolerances(type("Float32", (), dict(precision=FLOAT32_PRECISION))())["reciprocity"]
+    ctx.plot("reciprocity", plot_reciprocity(rows, tol), "max relative asymmetry |f(a,b) - f(b,a)| per BSDF")
+    ctx.plot("albedo", plot_albedo(rows), "directional albedo against incidence (azimuth 0)")
+    ctx.json("rows", [dict(label=r.label, bsdf=r.bsdf, report=r.report) for r in rows], "every report")
+    for r in rows:
+        ctx.measure(f"{r.label}: albedo at 60 deg, furnace render vs quadrature", r.furnace_60, r.quadrature_60,
+                    4 * r.furnace_se + 1e-4, note=f"plausible: {'yes' if r.plausible else 'no'}; "
+                                                  + "; ".join(r.notes))

@@ -1,0 +1,452 @@
+"""The contract around a ``mitsuba.BSDF`` (any plugin; Mitsuba is imported lazily).
+
+Conventions, Mitsuba 3 to :mod:`plausible.bxdf`:
+
+* **Directions.**  Mitsuba's BSDF methods take ``si.wi`` (the direction the
+  path arrived from, in the local shading frame) and ``wo``; both point away
+  from the surface, as plausible's do.  The contract here is
+  ``eval(wi, wo)`` with plausible's ``wi = si.wi`` and ``wo = wo``: ``sample(wi, u)``
+  is Mitsuba's ``sample(ctx, si, u[0], u[1:])`` from ``si.wi``, ``pdf`` is Mitsuba's
+  ``pdf``, so the sampling checks test exactly what Mitsuba's integrators use.
+* **Cosine.**  Mitsuba's ``eval`` is ``f cos(theta_o)``; the contract's ``eval`` is
+  ``f``: the value is divided by ``cos(theta_o)`` (of the float32 direction
+  Mitsuba saw, so the division undoes the multiplication to the last bit).
+  Mitsuba's sample weight ``f cos / pdf`` is the contract's weight as it is.
+* **Transport modes.**  ``BSDFContext.mode``: in ``Radiance`` (path tracing)
+  ``si.wi`` points to the camera, so the contract's ``f(wi, wo)`` is the BRDF of
+  light arriving from ``wo`` seen from ``wi`` and its albedo is what a path
+  tracer's throughput averages; in ``Importance`` (light tracing) ``si.wi`` is the
+  light side and the albedo is the reflected fraction of the incident energy.  A
+  mode-consistent plugin has ``f_radiance(a, b) = f_importance(b, a)``; the two
+  differ only for a non-reciprocal BSDF.  Both are probed; where they differ
+  both are checked (:meth:`MitsubaBSDF.views`).
+* **Components.**  ``BSDFContext.type_mask`` selects the smooth reflection lobes
+  (``DiffuseReflection | GlossyReflection``) when the plugin has others: delta
+  lobes (``conductor``, ``plastic``'s coating, ``dielectric``) have no density
+  and are excluded from the integrals; their reflectance is measured by sampling
+  them alone and reported, added to the smooth albedo (``energy+delta``).
+  Transmission lobes are excluded: the reflection hemisphere is checked, and the
+  report says transmission was not.
+* **Sides.**  Mitsuba's one-sided plugins reflect only above the shading normal.
+  A plugin with a reflecting ``BackSide`` component (``twosided``) is checked on
+  the back too (directions mirrored through the surface, ``z -> -z``), unless the
+  back gives the same values as the front.
+* **Precision.**  The RGB and mono LLVM/CUDA variants compute in float32 (no
+  double-precision variant is installed with the ``mitsuba`` wheels), so one
+  ``eval`` of a smooth lobe is good to about ``1e-7`` relative (``2^-24 = 6e-8``
+  per operation; measured asymmetry of ``diffuse`` and ``roughconductor``:
+  1.1e-7), but a direction is itself rounded to float32, and a sharp lobe's value
+  moves by much more over one ulp of its direction: the sampler of
+  ``roughconductor`` (alpha 0.01) at 89 degrees reports a pdf 3.3e-4 away from
+  ``pdf()`` at the direction it returned (it computes the pdf from the microfacet
+  normal, ``pdf()`` from the half vector of the rounded direction), and
+  ``principled`` is asymmetric by 2.1e-5 at grazing.  The adapter declares
+  ``precision = 1e-4``; :func:`plausible.analysis.adapters.tolerances` derives
+  reciprocity ``<= 1e-4`` and sampling ``<= 1e-3`` from it (a deliberate defect,
+  a pdf 10% off or an asymmetric lobe, is 100 times larger).  Every integral is
+  summed in float64.  Directions returned by Mitsuba's sampler are kept as
+  float32 gave them (not renormalised), so that ``pdf(wi, wo)`` of a sampled
+  ``wo`` sees the same bits.  Spectral and polarized variants are refused (their values depend on
+  the sampled wavelengths, or are Mueller matrices); use ``llvm_ad_rgb``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..bxdf import CHUNK, HORIZON, Sample, _as_array, _as_unit_interval, _check_directions
+
+__all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml", "ensure_variant"]
+
+#: Relative precision declared for a float32 Mitsuba variant (see the module docstring):
+#: float32 rounds a direction by 2^-24 relative, and a sharp lobe's value moves by far more
+#: than that over one ulp (the pdf of roughconductor alpha 0.01 at 89 degrees: the sampler's
+#: pdf and pdf() at the sampled direction differ by 3.3e-4; principled's f(a, b) and f(b, a)
+#: by 2.1e-5 at grazing).
+FLOAT32_PRECISION = 1e-4
+
+#: The variant set when none is: LLVM, RGB, float32 (the only precision installed).
+DEFAULT_VARIANT = "llvm_ad_rgb"
+
+#: Incidence angles (degrees) of the delta-lobe reflectance of a purely specular plugin.
+DELTA_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9)
+
+
+def ensure_variant():
+    """Import Mitsuba and set :data:`DEFAULT_VARIANT` if no variant is set; return ``mi``."""
+    import mitsuba as mi
+
+    if mi.variant() is None:
+        try:
+            mi.set_variant(DEFAULT_VARIANT)
+        except (ImportError, AttributeError) as e:
+            raise RuntimeError(f"Mitsuba variant {DEFAULT_VARIANT} cannot be set ({e})") from None
+    return mi
+
+
+def load_bsdf_dict(d: dict):
+    """``mi.load_dict(d)`` as a BSDF (sets the variant if none is); ValueError if it is not one."""
+    mi = ensure_variant()
+    if not isinstance(d, dict) or "type" not in d:
+        raise ValueError(f"--mitsuba must be a JSON object with a 'type', as mi.load_dict takes it; got {d!r}")
+    try:
+        obj = mi.load_dict(d)
+    except Exception as e:  # Mitsuba raises RuntimeError or its own exceptions with the plugin's message
+        raise ValueError(f"mi.load_dict({d}) failed: {str(e).strip().splitlines()[-1]}") from None
+    if not isinstance(obj, mi.BSDF):
+        raise ValueError(f"--mitsuba: {d.get('type')!r} is a Mitsuba {type(obj).__name__}, not a BSDF")
+    return obj
+
+
+def load_bsdf_xml(path: str, id: str | None = None):
+    """The BSDF with ``id`` in the Mitsuba XML file ``path``: the file's root if it is
+    a ``<bsdf>``, else a shape's BSDF of that id, else the ``<bsdf id=...>`` element
+    loaded on its own.  ValueError naming the ids found when there is none."""
+    import xml.etree.ElementTree as ET
+
+    mi = ensure_variant()
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError) as e:
+        raise ValueError(f"--mitsuba-xml {path}: {e}") from None
+    ids = [el.get("id") for el in root.iter("bsdf") if el.get("id")]
+    if root.tag == "bsdf" and (id is None or root.get("id") == id):
+        return mi.load_file(path)
+    if id is None:
+        raise ValueError(f"--mitsuba-xml {path}: give --id NAME; BSDF ids in the file: {', '.join(ids) or 'none'}")
+    el = next((e for e in root.iter("bsdf") if e.get("id") == id), None)
+    if el is None:
+        raise ValueError(f"--mitsuba-xml {path}: no <bsdf id={id!r}>; BSDF ids in the file: {', '.join(ids) or 'none'}")
+    try:   # load the scene, so that defaults, references and textures resolve as Mitsuba resolves them
+        scene = mi.load_file(path)
+        for shape in scene.shapes():
+            b = shape.bsdf()
+            if b is not None and b.id() == id:
+                return b
+    except Exception:  # a scene that does not load on its own (missing meshes): load the element alone
+        pass
+    el.set("version", root.get("version", "3.0.0"))
+    try:
+        return mi.load_string(ET.tostring(el, encoding="unicode"))
+    except Exception as e:
+        raise ValueError(f"--mitsuba-xml {path} --id {id}: {str(e).strip().splitlines()[-1]}") from None
+
+
+def _flags(mi, bsdf):
+    F = mi.BSDFFlags
+    comps = [int(bsdf.flags(i)) for i in range(bsdf.component_count())] or [int(bsdf.flags())]
+    smooth = int(F.DiffuseReflection | F.GlossyReflection)
+    delta = int(F.DeltaReflection) | int(F.Delta1D) & int(F.Reflection)
+    trans = int(F.Transmission) | int(F.Null)
+    return comps, smooth, delta, trans
+
+
+class MitsubaBSDF:
+    """The contract of :mod:`plausible.bxdf` around a ``mitsuba.BSDF`` (see the module docstring).
+
+    ``mode``: ``"radiance"`` or ``"importance"``; ``side``: ``"front"`` or ``"back"``;
+    ``uv``: the surface point at which textures are evaluated; ``params``: shown in
+    the report (e.g. the dict the plugin was loaded from).  Raises ValueError for a
+    BSDF that does not reflect at all, or a spectral / polarized variant.
+    """
+
+    def __init__(self, bsdf, *, mode: str = "radiance", side: str = "front", uv=(0.5, 0.5),
+                 params: dict | None = None, name: str | None = None):
+        import drjit as dr
+        import mitsuba as mi
+
+        self._mi, self._dr, self.bsdf = mi, dr, bsdf
+        if mode not in ("radiance", "importance"):
+            raise ValueError(f"mode must be 'radiance' or 'importance', got {mode!r}")
+        if side not in ("front", "back"):
+            raise ValueError(f"side must be 'front' or 'back', got {side!r}")
+        if mi.is_spectral or mi.is_polarized:
+            raise ValueError(f"Mitsuba variant {mi.variant()} is spectral or polarized: the checks need "
+                             f"RGB or mono values; set {DEFAULT_VARIANT} before loading the BSDF")
+        self.mode, self.side, self.uv = mode, side, tuple(float(x) for x in uv)
+        self.plugin = name or str(bsdf).splitlines()[0].split("[", 1)[0].strip(" :") or type(bsdf).__name__
+        self.params = dict(params) if params is not None else _traverse_params(mi, bsdf)
+        self.precision = FLOAT32_PRECISION   # every installed variant is float32, scalar_rgb too
+        comps, smooth, delta, trans = _flags(mi, bsdf)
+        self.declares_flags = any(comps)
+        has = lambda bits: [i for i, c in enumerate(comps) if c & bits]  # noqa: E731
+        self.smooth_components = has(smooth) if self.declares_flags else [0]
+        self.delta_components = has(delta)
+        self.transmission_components = has(trans)
+        if not self.smooth_components and not self.delta_components:
+            raise ValueError(f"{self.plugin}: not a reflective BSDF (component flags "
+                             f"{[_flag_names(mi, c) for c in comps]}): nothing to check on the reflection "
+                             "hemisphere")
+        back = int(mi.BSDFFlags.BackSide)
+        self.has_back = any(c & back and c & (smooth | delta) for c in comps)
+        self.mask = smooth if (self.delta_components or self.transmission_components) else None
+        self.channels = self._probe_channels()
+        self.not_applicable = {}
+        if not self.smooth_components:
+            why = "only delta lobes: nothing to integrate (their reflectance is reported as energy+delta)"
+            self.not_applicable = dict(reciprocity=why, energy=why, sampling=why, chi2=why)
+        self.notes = self._notes(comps)
+        # the declared anisotropy (is_isotropic's probe compares at float64 precision, and float32
+        # rounding would make every plugin look anisotropic); a plugin that hides its anisotropy
+        # is checked at azimuth 0 only
+        if self.declares_flags:
+            self.isotropic = not int(bsdf.flags()) & int(mi.BSDFFlags.Anisotropic)
+
+    @property
+    def name(self):
+        tags = [] if (self.mode, self.side) == ("radiance", "front") else [self.mode, self.side]
+        return f"mitsuba:{self.plugin}" + (f" [{', '.join(tags)}]" if tags else "")
+
+    def __repr__(self):
+        return f"MitsubaBSDF({self.plugin}, mode={self.mode}, side={self.side})"
+
+    # -- Mitsuba calls ----------------------------------------------------------------------
+    def _ctx(self, mask=None):
+        mi = self._mi
+        ctx = mi.BSDFContext(mi.TransportMode.Radiance if self.mode == "radiance" else mi.TransportMode.Importance)
+        m = self.mask if mask is None else mask
+        if m is not None:
+            ctx.type_mask = m
+        return ctx
+
+    def _si(self, wi32):
+        mi, dr = self._mi, self._dr
+        si = dr.zeros(mi.SurfaceInteraction3f, len(wi32))
+        si.wi = mi.Vector3f(wi32[:, 0], wi32[:, 1], wi32[:, 2])
+        si.uv = mi.Point2f(*self.uv)
+        return si
+
+    def _local(self, w):
+        """plausible's local direction -> the one Mitsuba sees (float32; mirrored for the back side)."""
+        w = np.array(w, dtype=np.float32)
+        if self.side == "back":
+            w[:, 2] = -w[:, 2]
+        return w
+
+    def _vec(self, w32):
+        return self._mi.Vector3f(w32[:, 0], w32[:, 1], w32[:, 2])
+
+    def _spectrum(self, v, n):
+        a = np.asarray(v.numpy() if hasattr(v, "numpy") else v, dtype=np.float64)
+        a = a.reshape(-1, n)
+        return a.T if a.shape[0] > 1 else a[0]
+
+    def _probe_channels(self):
+        v = self._mi_eval(np.array([[0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, 1.0]]))
+        return v.shape[1] if v.ndim == 2 else None
+
+    def _mi_eval(self, a, b):
+        wi, wo = self._local(a), self._local(b)
+        v = self.bsdf.eval(self._ctx(), self._si(wi), self._vec(wo))
+        cos = np.abs(wo[:, 2].astype(np.float64))
+        v = self._spectrum(v, len(a))
+        return v / (cos[:, None] if v.ndim == 2 else cos)
+
+    def _mi_pdf(self, a, b):
+        wi, wo = self._local(a), self._local(b)
+        return np.asarray(self.bsdf.pdf(self._ctx(), self._si(wi), self._vec(wo)).numpy(), dtype=np.float64)
+
+    # -- the contract --------------------------------------------------------------------------
+    def _pairs(self, wi, wo):
+        wi = _as_float32_directions("wi", wi)
+        wo = _as_float32_directions("wo", wo)
+        shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
+        return (np.broadcast_to(wi, shape + (3,)).reshape(-1, 3), np.broadcast_to(wo, shape + (3,)).reshape(-1, 3),
+                shape)
+
+    def _upper(self, fn, a, b, tail):
+        out = np.zeros((len(a),) + tail)
+        up = np.nonzero((a[:, 2] > HORIZON) & (b[:, 2] > HORIZON))[0]
+        for s in range(0, len(up), CHUNK):
+            k = up[s:s + CHUNK]
+            out[k] = fn(a[k], b[k])
+        return out
+
+    def eval(self, wi, wo):
+        a, b, shape = self._pairs(wi, wo)
+        tail = (self.channels,) if self.channels else ()
+        return self._upper(self._mi_eval, a, b, tail).reshape(shape + tail)
+
+    def pdf(self, wi, wo):
+        a, b, shape = self._pairs(wi, wo)
+        return self._upper(self._mi_pdf, a, b, ()).reshape(shape)
+
+    def sample(self, wi, u, mask=None) -> Sample:
+        mi = self._mi
+        wi = _as_float32_directions("wi", wi)
+        u = _as_unit_interval(u)
+        shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
+        a = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
+        uu = np.minimum(np.broadcast_to(u, shape + (3,)).reshape(-1, 3), 1 - 2.0 ** -24).astype(np.float32)
+        tail = (self.channels,) if self.channels else ()
+        wo = np.zeros((len(a), 3))
+        wo[:, 2] = -1.0
+        weight = np.zeros((len(a),) + tail)
+        pdf = np.zeros(len(a))
+        for s in range(0, len(a), CHUNK):
+            e = min(s + CHUNK, len(a))
+            wi32 = self._local(a[s:e])
+            bs, w = self.bsdf.sample(self._ctx(mask), self._si(wi32), mi.Float(uu[s:e, 0]),
+                                     mi.Point2f(uu[s:e, 1], uu[s:e, 2]))
+            o = np.asarray(bs.wo.numpy(), dtype=np.float64).reshape(3, -1).T
+            if self.side == "back":
+                o[:, 2] = -o[:, 2]
+            # Mitsuba's float32 direction as it is (|wo| = 1 +- 1e-7): renormalising it in float64
+            # would move it by up to an ulp when it is rounded again, and the pdf of a sharp lobe
+            # (alpha 0.01 at 89 degrees) changes by 1e-3 over one ulp
+            nrm = np.linalg.norm(o, axis=-1)
+            good = np.isfinite(nrm) & (nrm > 0)
+            o = np.where(good[:, None], _unit32(o, nrm), np.array([0.0, 0.0, -1.0]))
+            p = np.asarray(bs.pdf.numpy(), dtype=np.float64)
+            ww = self._spectrum(w, e - s)
+            ok = good & (o[:, 2] > HORIZON) & (a[s:e, 2] > HORIZON) & (p > 0)
+            wo[s:e] = o
+            pdf[s:e] = np.where(ok, p, 0.0)
+            weight[s:e] = np.where(ok[:, None] if tail else ok, ww, 0.0)
+        return Sample(wo.reshape(shape + (3,)), weight.reshape(shape + tail), pdf.reshape(shape))
+
+    def peak_directions(self, wi):
+        return [np.array([-wi[0], -wi[1], wi[2]])]
+
+    # -- beyond the contract: views, notes, delta lobes -------------------------------------------
+    def with_(self, **kw):
+        """The same BSDF under another ``mode`` / ``side``."""
+        args = dict(mode=self.mode, side=self.side, uv=self.uv, params=self.params, name=self.plugin)
+        args.update(kw)
+        return MitsubaBSDF(self.bsdf, **args)
+
+    def views(self) -> list:
+        """``[(label, contract), ...]``: importance transport and the back side, each
+        where it gives values that differ from the radiance front (probed on 256
+        random pairs, relative ``10 * precision``)."""
+        out = []
+        if not self.smooth_components:
+            return out
+        imp = self.with_(mode="importance")
+        if not _same(self, imp, self.precision):
+            out.append(("importance", imp))
+        if self.has_back:
+            back = self.with_(side="back")
+            if not _reflects(back):
+                self.notes.append("back side: declared, but eval is 0 there (nothing reflected): not checked")
+            elif not _same(self, back, self.precision):
+                out.append(("back", back))
+                imp_b = back.with_(mode="importance")
+                if not _same(back, imp_b, self.precision):
+                    out.append(("back, importance", imp_b))
+        return out
+
+    def _notes(self, comps):
+        mi = self._mi
+        n = [f"Mitsuba {mi.__version__} plugin {self.plugin!r}, variant {mi.variant()} (float32): "
+             f"declared precision {self.precision:g}, so reciprocity tolerance {self.precision:g} and "
+             f"sampling tolerance {max(1e-6, 10 * self.precision):g}; f = eval / cos(theta_o); "
+             f"wi = si.wi ({self.mode} transport, {self.side} side)"]
+        if not self.declares_flags:
+            n.append("the plugin declares no flags: treated as one smooth reflection lobe")
+        if self.delta_components:
+            n.append(f"delta lobes (components {self.delta_components}) excluded from the integrals; their "
+                     "reflectance is added to the smooth albedo in energy+delta")
+        if self.transmission_components:
+            n.append(f"transmission (components {self.transmission_components}) NOT checked: reflection "
+                     "hemisphere only")
+        return n
+
+    def delta_reflectance(self, wi, n: int = 64) -> np.ndarray:
+        """Reflectance of the delta lobes alone at ``wi`` (3,): the mean sample weight
+        with only the delta reflection lobes enabled (a delta lobe's weight is its
+        reflectance; ``n`` uniform numbers average over a stochastic lobe choice)."""
+        if not self.delta_components:
+            return np.zeros(self.channels) if self.channels else 0.0
+        F = self._mi.BSDFFlags
+        rng = np.random.default_rng(11)
+        s = self.sample(np.broadcast_to(np.asarray(wi, float), (n, 3)), rng.random((n, 3)),
+                        mask=int(F.DeltaReflection) | (int(F.Delta1D) & int(F.Reflection)))
+        return s.weight.mean(axis=0)
+
+    def annotate(self, report):
+        """Add ``energy+delta`` (delta reflectance plus the smooth albedo of the
+        ``energy`` grid; max over it <= 1 + 1e-4) when the plugin has delta lobes."""
+        from .albedo import direction
+        from .checks import PropertyResult
+
+        if not self.delta_components or (self.mode, self.side) != ("radiance", "front"):
+            return
+        try:
+            grid = [(g["theta_deg"], g["phi_deg"], g["albedo"]) for g in report["energy"].details["grid"]]
+        except (KeyError, TypeError):
+            grid = [(t, 0.0, 0.0) for t in DELTA_THETAS]
+        rows = []
+        for t, p, a in grid:
+            d = float(np.max(np.atleast_1d(self.delta_reflectance(direction(math.radians(t), math.radians(p))))))
+            rows.append(dict(theta_deg=t, phi_deg=p, smooth=a, delta=d, total=a + d))
+        w = max(rows, key=lambda r: r["total"])
+        report.results.append(PropertyResult(
+            "energy+delta", w["total"] <= 1 + 1e-4, w["total"], "<= 1 + 0.0001 (smooth albedo + delta reflectance)",
+            dict(theta_i_deg=w["theta_deg"], phi_i_deg=w["phi_deg"], smooth=w["smooth"], delta=w["delta"]),
+            dict(grid=rows)))
+
+
+#: Directions whose length is within this of 1 are passed to Mitsuba as they are (rounded
+#: to float32), not renormalised: float32 cannot tell them from unit vectors (2^-22).
+UNIT_SLACK = 2.0 ** -20
+
+
+def _unit32(w, nrm):
+    """``w / |w|`` except where ``|w|`` is within :data:`UNIT_SLACK` of 1 (then ``w``)."""
+    near = np.abs(nrm - 1.0) <= UNIT_SLACK
+    return np.where(near[..., None], w, w / np.where(nrm > 0, nrm, 1.0)[..., None])
+
+
+def _as_float32_directions(name, w):
+    """Validated directions (as :func:`plausible.bxdf.as_directions`), normalised only
+    where they are not unit vectors to float32 precision: a direction the adapter
+    returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
+    a = _as_array(name, w)
+    _check_directions(name, a)
+    return _unit32(a, np.sqrt(np.sum(a * a, axis=-1)))
+
+
+def _flag_names(mi, bits: int) -> str:
+    """``'DiffuseReflection|FrontSide'`` for the single-bit BSDFFlags set in ``bits``."""
+    names = [k for k in ("Null", "DiffuseReflection", "DiffuseTransmission", "GlossyReflection", "GlossyTransmission",
+                         "DeltaReflection", "DeltaTransmission", "Anisotropic", "SpatiallyVarying", "NonSymmetric",
+                         "FrontSide", "BackSide") if bits & int(getattr(mi.BSDFFlags, k))]
+    return "|".join(names) or "none"
+
+
+def _probe_pairs(n: int = 256):
+    rng = np.random.default_rng(5)
+    d = rng.normal(size=(2, n, 3))
+    d[..., 2] = np.abs(d[..., 2]) + 0.05
+    return d
+
+
+def _reflects(a) -> bool:
+    d = _probe_pairs()
+    return bool(np.any(a.eval(d[0], d[1]) != 0))
+
+
+def _same(a, b, precision) -> bool:
+    d = _probe_pairs()
+    fa, fb = a.eval(d[0], d[1]), b.eval(d[0], d[1])
+    scale = np.maximum(np.abs(fa), np.abs(fb))
+    return bool(np.all(np.abs(fa - fb) <= 10 * precision * scale + 1e-12 * (np.max(scale) + 1e-300)))
+
+
+def _traverse_params(mi, bsdf) -> dict:
+    """Small parameters of ``bsdf`` (``mi.traverse``), as floats or lists, for the report."""
+    out = {}
+    try:
+        for k, v in mi.traverse(bsdf).items():
+            try:
+                a = np.asarray(v.numpy() if hasattr(v, "numpy") else v, dtype=np.float64).ravel()
+            except (TypeError, ValueError):
+                continue
+            if 0 < a.size <= 3:
+                out[k] = float(a[0]) if a.size == 1 else [float(x) for x in a]
+    except Exception:  # a Python plugin without traverse(): no parameters to show
+        pass
+    return out
