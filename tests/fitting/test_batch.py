@@ -160,3 +160,24 @@ def test_cli_fit_batch_names_a_bad_model(tmp_path):
                                   str(tmp_path)])
     assert r.exit_code == 2 and "unknown model 'nope'" in r.output
     assert not (tmp_path / "fits").exists()
+
+
+def test_ctrl_c_keeps_finished_fits_and_says_how_to_resume(tmp_path):
+    targets = [f"lambertian:rd={x}" for x in (0.1, 0.3, 0.5, 0.7, 0.9)]
+    out = tmp_path / "res"
+    cmd = [sys.executable, "-c", "from plausible.cli import main; main()", "fit-batch", *targets,
+           "--models", "lambertian,modified-phong", "--metrics", "l2-cos", "--out", str(out),
+           "--workers", "0", "--starts", "1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    table = out / "fits" / "lambertian.csv"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if table.exists() and len(table.read_text().splitlines()) >= 2:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    output, _ = proc.communicate(timeout=60)
+    assert proc.returncode == 130, output
+    assert "interrupted" in output and "run the same command again to resume" in output
+    rows = batch.load_results(out)
+    assert 1 <= len(rows) < 10 and all(r["status"] == "ok" for r in rows)
