@@ -287,12 +287,12 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
                                 progress=bar, on_result=on_result)
     except KeyboardInterrupt:
         console.print(f"[yellow]interrupted[/yellow]: the finished fits are in {escape(out)}; "
-                      "run the same command again to resume")
+                      "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
     if s.dashboard:
         console.print(f"Dask dashboard: {s.dashboard}")
     console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "
-                  f"{s.seconds:.1f} s on {s.workers} workers")
+                  f"{s.seconds:.1f} s on {s.workers} workers", soft_wrap=True)
     if report:
         first = [t for t in targets][:1]
         p = write_report(out, report, spheres=list(spheres) or first)
