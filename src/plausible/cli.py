@@ -365,6 +365,104 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
             console.print(f"wrote {escape(str(p))}")
 
 
+@main.command("fit-batch")
+@click.argument("targets", nargs=-1, required=True)
+@click.option("--models", required=True, metavar="A,B,...", help="Models to fit (comma-separated registry names).")
+@click.option("--metrics", default="perceptual", show_default=True, metavar="A,B,...",
+              help="Metrics (comma-separated: perceptual, l2-cos, log).")
+@click.option("--out", required=True, type=click.Path(file_okay=False),
+              help="Results folder: OUT/fits/MODEL.csv, one row per fit, appended as fits finish.")
+@click.option("--scheduler", metavar="ADDRESS", help="A running Dask scheduler (tcp://host:8786); "
+              "default: local worker processes.")
+@click.option("--workers", type=click.IntRange(0), help="Local worker processes (default: all cores; 0: "
+              "no Dask, one fit after another).")
+@click.option("--starts", type=click.IntRange(1), default=4, show_default=True, help="Optimiser starts per fit.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the random starts (the same for every fit).")
+@click.option("--time-limit", type=click.FloatRange(0), help="Seconds per fit (best point so far).")
+@click.option("--retry-failed", is_flag=True, help="Run again the fits recorded as failed.")
+@click.option("--report", "report", type=click.Path(file_okay=False), help="Write the comparison report here.")
+@click.option("--spheres", multiple=True, metavar="TARGET",
+              help="Targets whose spheres (target and fits) the report renders (repeatable; default: the first).")
+def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, seed, time_limit, retry_failed,
+                  report, spheres):
+    """Fit several MODELS to several TARGETS under several METRICS (Dask), resumably.
+
+    TARGETS: model specs, MERL .binary files or CSV tables. Fits already in OUT
+    are skipped, so an interrupted batch resumes where it stopped.
+    """
+    from rich.markup import escape
+
+    from .fitting import batch
+    from .fitting.batch_report import write_report
+
+    models_ = [m.strip() for m in models.split(",") if m.strip()]
+    metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
+    try:
+        todo = batch.plan(targets, models_, metrics_, out=out, seed=seed, starts=starts,
+                          time_limit=time_limit, retry_failed=retry_failed)
+    except ValueError as e:
+        _fail(str(e))
+    failed = [0]
+
+    def on_result(row):
+        if row["status"] != "ok":
+            failed[0] += 1
+            console.print(f"[red]failed[/red] {escape(row['target'])} / {row['model']} / {row['metric']}: "
+                          f"{escape(str(row['error']))}")
+
+    bar = _BatchBar(failed)
+    console.print(f"fit-batch: {len(todo)} fits to run ({scheduler or 'local processes'})")
+    try:
+        with bar:
+            s = batch.fit_batch(targets, models_, metrics_, out, scheduler=scheduler, workers=workers, seed=seed,
+                                starts=starts, time_limit=time_limit, retry_failed=retry_failed,
+                                progress=bar, on_result=on_result)
+    except KeyboardInterrupt:
+        console.print(f"[yellow]interrupted[/yellow]: the finished fits are in {escape(out)}; "
+                      "run the same command again to resume", soft_wrap=True)
+        sys.exit(130)
+    if s.dashboard:
+        console.print(f"Dask dashboard: {s.dashboard}")
+    console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "
+                  f"{s.seconds:.1f} s on {s.workers} workers", soft_wrap=True)
+    if report:
+        first = [t for t in targets][:1]
+        p = write_report(out, report, spheres=list(spheres) or first)
+        console.print(f"wrote {escape(str(p))}")
+
+
+class _BatchBar:
+    """The fit-batch progress bar (counts, failures, time left), stopped on every exit."""
+
+    def __init__(self, failed):
+        self.failed = failed
+        self.prog = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.prog is not None:
+            self.prog.stop()
+        return False
+
+    def __call__(self, total, label=""):
+        from rich.progress import MofNCompleteColumn, TimeRemainingColumn
+
+        if not console.is_terminal:
+            return lambda: None
+        self.prog = Progress(TextColumn("fits"), BarColumn(), MofNCompleteColumn(),
+                             TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
+                             TimeRemainingColumn(), console=console, transient=True)
+        self.prog.start()
+        task = self.prog.add_task("fits", total=total, failed=0)
+
+        def tick(n=1):
+            self.prog.update(task, advance=n, failed=self.failed[0])
+
+        return tick
+
+
 @main.command()
 @click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the images, data and index.html.")
