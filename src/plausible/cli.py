@@ -464,6 +464,22 @@ class _BatchBar:
 
 
 @main.command()
+@click.option("--port", type=click.IntRange(1, 65535), default=8765, show_default=True, help="Port to listen on.")
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Address to bind (localhost by default; another address exposes the explorer to the network).")
+@click.option("--no-browser", is_flag=True, help="Do not open the page in a browser.")
+def explore(port, host, no_browser):
+    """Interactive BRDF explorer in the browser (lit sphere, lobes, albedo, verdict, exports)."""
+    from .explorer import serve
+
+    console.print(f"plausible explorer on http://{host}:{port}/ (Ctrl-C to stop)", soft_wrap=True)
+    try:
+        serve(host=host, port=port, open_browser=not no_browser)
+    except KeyboardInterrupt:
+        pass
+
+
+@main.command()
 @click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the images, data and index.html.")
 @click.option("--only", "only", multiple=True, metavar="NAME", help="Make only this figure (repeatable).")

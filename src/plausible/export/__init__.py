@@ -35,7 +35,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from .. import symbolic
-from ..bxdf import BxDF, _fmt
+from ..bxdf import BxDF
+from ..text import fmt
 from ..symbolic import SYM
 from .glsl import Emitter, channels3, helpers, literal
 
@@ -215,7 +216,7 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         else:
             values.append(Uniform(name_of(s.name), "float", (float(v),), s))
     uni = {s.name for s in specs}
-    baked = {k: _fmt(v) for k, v in model.params.items() if k not in uni}
+    baked = {k: fmt(v, other=repr) for k, v in model.params.items() if k not in uni}
     return GLSLShader(model=repr(model), prefix=prefix, uniforms=values, tables=em.table_declarations(),
                       helpers=helpers(prefix, em.used), functions="\n".join(funcs),
                       sampling=do_sampling, baked=baked)

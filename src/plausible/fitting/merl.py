@@ -88,7 +88,15 @@ def cell_centres():
     th = ((np.arange(RES[0]) + 0.5) / RES[0]) ** 2 * HALF_PI
     td = (np.arange(RES[1]) + 0.5) / RES[1] * HALF_PI
     pd = (np.arange(RES[2]) + 0.5) / RES[2] * math.pi
-    TH, TD, PD = np.meshgrid(th, td, pd, indexing="ij")
+    return from_half_diff(*np.meshgrid(th, td, pd, indexing="ij"))
+
+
+def from_half_diff(theta_h, theta_d, phi_d):
+    """Direction pairs ``(wi, wo)`` (arrays ``(..., 3)``) with Rusinkiewicz
+    coordinates ``theta_h, theta_d, phi_d`` and ``phi_h = 0``: the inverse of
+    :func:`half_diff` (``wi`` is the difference vector rotated by ``theta_h``
+    about ``y``; ``wo`` its mirror image about the half vector)."""
+    TH, TD, PD = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_h, theta_d, phi_d)))
     dx, dy, dz = np.sin(TD) * np.cos(PD), np.sin(TD) * np.sin(PD), np.cos(TD)
     ch, sh = np.cos(TH), np.sin(TH)
     wi = np.stack([dx * ch + dz * sh, dy, dz * ch - dx * sh], axis=-1)

@@ -1,0 +1,82 @@
+"""A model as a Mitsuba 3 scene description: the dict ``mi.load_dict`` takes and
+the ``<bsdf>`` XML element of a scene file, for the plugins that
+:func:`plausible.mitsuba.register` adds.  Pure data: Mitsuba is not imported.
+
+Scalars are floats, colours ``{"type": "rgb", "value": [r, g, b]}`` (``<rgb>``),
+choices strings, Lafortune's lobes the ``;``-separated string the plugin parses,
+a nested model (pumped-up's base) its spec string.
+"""
+
+from __future__ import annotations
+
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from ..bxdf import BxDF
+
+
+def plugin_name(model: BxDF) -> str:
+    """The Mitsuba plugin name of a registered model (``modified-phong`` -> ``phong``)."""
+    from . import plugin_names
+
+    for plugin, name in plugin_names().items():
+        if name == model.name and not (name == "modified-phong" and plugin != "phong"):
+            return plugin
+    raise ValueError(f"{model.name!r} has no Mitsuba plugin (is it a registered model?)")
+
+
+def spec_string(model: BxDF) -> str:
+    """``name:k=v:...`` that :func:`plausible.registry.make_from_spec` rebuilds the
+    model from (:func:`plausible.registry.spec_of`)."""
+    from ..registry import spec_of
+
+    return spec_of(model)
+
+
+def _value(p, v):
+    if isinstance(v, BxDF):
+        return spec_string(v)
+    if p.kind == "color":
+        arr = np.atleast_1d(np.asarray(v, dtype=np.float64))
+        if arr.size == 1:
+            return float(arr[0])
+        return {"type": "rgb", "value": [float(x) for x in arr]}
+    if isinstance(v, (list, tuple)):
+        from ..params import format_groups
+
+        return format_groups(v)
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        return float(v)
+    return v
+
+
+def to_dict(model: BxDF) -> dict:
+    """The ``mi.load_dict`` description of ``model`` as a plausible plugin."""
+    d = {"type": plugin_name(model)}
+    for p in type(model).PARAMS:
+        v = model.params[p.name]
+        if v is None:
+            continue
+        d[p.name] = _value(p, v)
+    return d
+
+
+def to_xml(model: BxDF, id: str | None = None) -> str:
+    """The ``<bsdf>`` element of a Mitsuba 3 scene file for ``model``."""
+    d = to_dict(model)
+    head = f'<bsdf type={quoteattr(d.pop("type"))}' + (f" id={quoteattr(id)}" if id else "") + ">"
+    lines = [head]
+    for k, v in d.items():
+        if isinstance(v, dict):
+            val = ", ".join(f"{x:.9g}" for x in v["value"])
+            lines.append(f"    <rgb name={quoteattr(k)} value={quoteattr(val)}/>")
+        elif isinstance(v, float):
+            lines.append(f"    <float name={quoteattr(k)} value={quoteattr(f'{v:.17g}')}/>")
+        else:
+            lines.append(f"    <string name={quoteattr(k)} value={quoteattr(str(v))}/>")
+    lines.append("</bsdf>")
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["plugin_name", "spec_string", "to_dict", "to_xml"]

@@ -1,0 +1,257 @@
+"""`plausible explore`: the server answers with the library's numbers and refuses
+what the API refuses; in a real browser (Debian's chromium via Playwright,
+WebGL2 on SwiftShader) the page loads without console errors, every model can
+be selected and drawn, a slider changes the sphere and the plots, the albedo
+shown is the API's, and the exports download and load."""
+
+import json
+import math
+import os
+import shutil
+import socket
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import plausible
+from plausible.explorer import views
+
+fastapi = pytest.importorskip("fastapi")
+from fastapi.testclient import TestClient  # noqa: E402
+
+from plausible.explorer.app import create_app  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def client():
+    return TestClient(create_app())
+
+
+def test_models_lists_every_registered_model(client):
+    names = [m["name"] for m in client.get("/api/models").json()]
+    assert names == plausible.names()
+
+
+def test_out_of_range_is_refused_with_the_api_message(client):
+    with pytest.raises(ValueError) as e:
+        plausible.make("ashikhmin-shirley", nu=-3)
+    r = client.post("/api/plane", json={"model": "ashikhmin-shirley", "params": {"nu": -3}})
+    assert r.status_code == 422 and r.json()["error"] == str(e.value)
+    r = client.post("/api/plane", json={"model": "modified-phong", "params": {"kd": 0.8, "ks": 0.5}})
+    assert r.status_code == 422 and "kd + ks" in r.json()["error"]
+    r = client.post("/api/plane", json={"model": "lambertian", "theta_i": 95})
+    assert r.status_code == 422 and "theta_i must lie in [0, 90]" in r.json()["error"]
+
+
+def test_plane_is_f_cos_in_the_plane_of_incidence(client):
+    m = plausible.make("modified-phong", kd=0.2, ks=0.6, n=40)
+    d = client.post("/api/plane", json={"model": "modified-phong", "params": {"kd": 0.2, "ks": 0.6, "n": 40},
+                                        "theta_i": 30}).json()
+    t = np.radians(d["theta_o"][100])
+    wo = [math.sin(t), 0, math.cos(t)]
+    wi = [-math.sin(math.radians(30)), 0, math.cos(math.radians(30))]
+    assert d["fcos"][100] == pytest.approx(float(m.eval(wi, wo)) * math.cos(t), rel=1e-12)
+
+
+def test_albedo_equals_the_library(client):
+    d = client.post("/api/albedo", json={"model": "ashikhmin-shirley-diffuse", "params": {"rd": 0.8}}).json()
+    th = np.radians(d["theta"])
+    # closed form of the coupled diffuse term: rd (1 - rs) (1 - (1 - cos/2)^5) (JGT 2000, eq. 5)
+    exact = 0.8 * (1 - 0.05) * (1 - (1 - np.cos(th) / 2) ** 5)
+    assert np.allclose(d["value"], exact, atol=1e-6) and d["energy_gained_at"] == []
+
+
+def test_energy_gain_is_marked(client):
+    # the original Phong model is not energy conserving near grazing (its albedo exceeds 1)
+    d = client.post("/api/albedo", json={"model": "phong", "params": {"ks": 1.0, "n": 1}}).json()
+    direct = plausible.albedo_curve(plausible.make("phong", ks=1.0, n=1), np.radians(d["theta"]))
+    over = [t for t, a, e in zip(d["theta"], direct.value, direct.error) if a - e > 1 + views.ENERGY_TOL]
+    assert over and d["energy_gained_at"] == over
+
+
+def test_slice_is_f_at_the_half_diff_angles(client):
+    d = client.post("/api/slice", json={"model": "blinn"}).json()
+    from plausible.fitting.merl import from_half_diff
+
+    wi, wo = from_half_diff(math.radians(d["theta_h"][5]), math.radians(d["theta_d"][20]), math.pi / 2)
+    assert d["f"][5][20] == pytest.approx(float(plausible.make("blinn").eval(wi, wo)), rel=1e-12)
+
+
+def test_exports_load(client):
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("llvm_ad_rgb")
+    import plausible.mitsuba as pm
+
+    pm.register()
+    params = {"nu": 20, "nv": 300, "rs": [0.9, 0.6, 0.2], "rd": 0.1}
+    get = lambda fmt: client.post("/api/export", json={"model": "ashikhmin-shirley", "params": params,
+                                                       "format": fmt})
+    r = get("mitsuba-dict")
+    assert r.headers["content-disposition"] == 'attachment; filename="ashikhmin-shirley.json"'
+    bsdf = mi.load_dict(json.loads(r.text))
+    import drjit as dr
+
+    wi = np.array([[0.3, 0.1, 0.948]]) / np.linalg.norm([0.3, 0.1, 0.948])
+    wo = np.array([[-0.33, -0.08, 0.94]]) / np.linalg.norm([-0.33, -0.08, 0.94])
+    si = dr.zeros(mi.SurfaceInteraction3f, 1)
+    si.wi = mi.Vector3f(np.ascontiguousarray(wi.T, dtype=np.float32))
+    got = np.array(bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(np.ascontiguousarray(wo.T, dtype=np.float32)))).T
+    want = plausible.make("ashikhmin-shirley", **params).eval(wi, wo) * wo[:, 2:3]   # reciprocal: order free
+    assert np.allclose(got, want, rtol=2e-4)          # the plugin has the exported parameters (float32)
+    mi.load_string('<scene version="3.0.0">' + get("mitsuba-xml").text + "</scene>")
+    again = plausible.registry.make_from_spec(get("spec").text.strip())
+    assert repr(again) == repr(plausible.make("ashikhmin-shirley", **params))
+    brdf = get("brdf").text.splitlines()
+    assert brdf[0] == "analytic" and "::begin parameters" in brdf and "::begin shader" in brdf
+    assert not any(line.startswith(("#define", "#version", "#if")) for line in brdf)   # the loader drops '#' lines
+    assert "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)" in "\n".join(brdf)
+    assert "plausible_f(" in get("glsl").text
+    r = client.post("/api/export", json={"model": "lambertian", "format": "png"})
+    assert r.status_code == 422 and "export format must be one of" in r.json()["error"]
+
+
+def test_cli_binds_localhost_by_default():
+    from plausible.cli import explore
+
+    opts = {o.name: o for o in explore.params}
+    assert opts["host"].default == "127.0.0.1" and opts["no_browser"].is_flag
+
+
+# -- in a real browser -----------------------------------------------------------------------
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def page():
+    sync_api = pytest.importorskip("playwright.sync_api")
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("Debian's chromium is not installed (make chromium)")
+    import uvicorn
+
+    port = _free_port()
+    server = uvicorn.Server(uvicorn.Config(create_app(), host="127.0.0.1", port=port, log_level="warning"))
+    th = threading.Thread(target=server.run, daemon=True)
+    th.start()
+    while not server.started:
+        time.sleep(0.05)
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=[
+            "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync"])
+        pg = browser.new_page(accept_downloads=True)
+        pg.errors = []
+        pg.on("console", lambda m: pg.errors.append(m.text) if m.type == "error" else None)
+        pg.on("pageerror", lambda e: pg.errors.append(str(e)))
+        pg.goto(f"http://127.0.0.1:{port}/")
+        pg.wait_for_function("window.explorer && window.explorer.ready", timeout=60_000)
+        yield pg
+        browser.close()
+    server.should_exit = True
+    th.join(5)
+
+
+def _idle(page):
+    page.wait_for_function("window.explorer.pending === 0", timeout=60_000)
+    page.wait_for_timeout(50)
+    page.wait_for_function("window.explorer.pending === 0", timeout=60_000)
+
+
+def _sphere(page, side="A"):
+    return page.evaluate(f"document.getElementById('sphere-{side}').toDataURL()")
+
+
+def test_page_loads_without_console_errors(page):
+    _idle(page)
+    assert page.errors == []
+    assert page.evaluate("window.explorer.sides.A.drawn") >= 1
+    assert page.locator("#status").inner_text() == ""
+
+
+def test_every_model_can_be_selected_and_drawn(page):
+    for name in plausible.names():
+        page.select_option("#model-A", name)
+        page.wait_for_function(f"window.explorer.sides.A && window.explorer.sides.A.name === '{name}' "
+                               "&& window.explorer.sides.A.drawn >= 1 && window.explorer.data.A.plane", timeout=60_000)
+        assert page.locator("#status").inner_text() == "", name
+        # the sphere shows the model: some pixels inside the disc are lit
+        lit = page.evaluate("""() => { const c = document.getElementById('sphere-A');
+            const g = c.getContext('webgl2'); const px = new Uint8Array(4 * c.width * c.height);
+            g.readPixels(0, 0, c.width, c.height, g.RGBA, g.UNSIGNED_BYTE, px);
+            let n = 0; for (let i = 0; i < px.length; i += 4) if (px[i] > 80 || px[i+1] > 80 || px[i+2] > 80) n++;
+            return n; }""")
+        assert lit > 50, name
+    assert page.errors == []
+
+
+def test_slider_changes_sphere_and_plots(page):
+    page.select_option("#model-A", "ashikhmin-shirley")
+    page.wait_for_function("window.explorer.sides.A.name === 'ashikhmin-shirley' && window.explorer.data.A.plane")
+    _idle(page)
+    before_img = _sphere(page)
+    before_plane = page.evaluate("window.explorer.data.A.plane.fcos")
+    page.locator("[data-param=nu] input[type=range]").fill("0.2")
+    page.wait_for_timeout(300)
+    _idle(page)
+    asked = page.evaluate("window.explorer.data.A.asked")
+    assert asked["params"]["nu"] == page.evaluate("window.explorer.sides.A.params.nu") < 100
+    assert _sphere(page) != before_img
+    after_plane = page.evaluate("window.explorer.data.A.plane.fcos")
+    expected = views.plane(views.build("ashikhmin-shirley", asked["params"]), asked["theta_i"])["fcos"]
+    assert np.allclose(after_plane, expected, rtol=1e-12) and not np.allclose(after_plane, before_plane)
+
+
+def test_albedo_shown_is_the_api_albedo(page):
+    page.select_option("#model-A", "reciprocal-phong")
+    page.wait_for_function("window.explorer.sides.A.name === 'reciprocal-phong'")
+    page.wait_for_function("document.querySelectorAll('#albedo-table tr[data-side=A]').length === 3 && "
+                           "window.explorer.data.A.albedo", timeout=60_000)
+    rows = page.locator("#albedo-table tr[data-side=A]")
+    m = plausible.make("reciprocal-phong")
+    for i in range(rows.count()):
+        theta = float(rows.nth(i).get_attribute("data-theta"))
+        shown = float(rows.nth(i).locator(".albedo-value").inner_text())
+        direct = float(plausible.albedo(m, plausible.analysis.direction(math.radians(theta))).value)
+        assert shown == pytest.approx(direct, rel=1e-5, abs=1e-6)
+
+
+def test_compare_two_models(page):
+    page.select_option("#model-B", "lambertian")
+    page.wait_for_function("window.explorer.sides.B && window.explorer.sides.B.drawn >= 1", timeout=60_000)
+    _idle(page)
+    assert page.locator("#sphere-B").is_visible() and page.evaluate("!!window.explorer.data.B.plane")
+    page.select_option("#model-B", "")
+    assert page.locator("#sphere-B").is_hidden()
+
+
+def test_exports_download(page, tmp_path):
+    page.select_option("#model-A", "ward")
+    page.wait_for_function("window.explorer.sides.A.name === 'ward' && window.explorer.sides.A.drawn >= 1")
+    _idle(page)
+    with page.expect_download() as dl:
+        page.click("#exports button[data-format=mitsuba-dict]")
+    path = tmp_path / dl.value.suggested_filename
+    dl.value.save_as(path)
+    assert path.name == "ward.json" and json.loads(path.read_text())["type"] == "ward"
+    with page.expect_download() as dl:
+        page.click("#exports button[data-format=brdf]")
+    assert dl.value.suggested_filename == "ward.brdf"
+    assert page.errors == []
+
+
+def test_lobe3d_is_f_cos_on_its_grid(client):
+    for params in ({}, {"rs": [0.9, 0.5, 0.1]}):          # grey and RGB
+        m = plausible.make("ashikhmin-shirley", **params)
+        d = client.post("/api/lobe3d", json={"model": "ashikhmin-shirley", "params": params, "theta_i": 40}).json()
+        t, p = math.radians(d["theta"][7]), math.radians(d["phi"][11])
+        wo = [math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)]
+        wi = [-math.sin(math.radians(40)), 0.0, math.cos(math.radians(40))]
+        assert d["fcos"][7][11] == pytest.approx(float(np.mean(m.eval(wi, wo))) * math.cos(t), rel=1e-12)
