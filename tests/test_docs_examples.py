@@ -62,15 +62,18 @@ def test_every_doc_has_examples_to_run():
 
 def test_shipped_examples_are_what_the_script_writes(tmp_path):
     _script().main([str(tmp_path)])
-    for name in ("samples.csv", "scene.xml"):
-        assert (tmp_path / name).read_bytes() == (ROOT / "docs/examples" / name).read_bytes(), name
+    assert (tmp_path / "scene.xml").read_bytes() == (ROOT / "docs/examples/scene.xml").read_bytes()
+    # the samples to rounding: a formula rewritten for accuracy may move the last bit of f
+    made, shipped = (np.loadtxt(d / "samples.csv", delimiter=",", skiprows=1)
+                     for d in (tmp_path, ROOT / "docs/examples"))
+    assert made.shape == shipped.shape and np.allclose(made, shipped, rtol=1e-12, atol=0)
 
 
 @pytest.mark.parametrize("command", COMMANDS)
 def test_documented_command(command, in_repo_copy):
     r = CliRunner().invoke(main, shlex.split(command)[1:])
     assert r.exit_code == 0, r.output
-    if "samples.csv" in command:         # made from kd = 0.3, ks = 0.5 (n = 20) with 2 % noise
+    if "samples.csv" in command and shlex.split(command)[1] == "fit":   # made from kd = 0.3, ks = 0.5 (n = 20) with 2 % noise
         got = json.loads((in_repo_copy / "fit" / "fit.json").read_text())["params"]
         truth = _script().SAMPLES_TRUTH
         assert got["n"] == truth["n"]

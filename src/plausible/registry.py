@@ -44,9 +44,18 @@ def _load():
 
 
 def names() -> list[str]:
-    """Names of every registered model, in registration order."""
+    """Names of every registered model: plausible's own by module (alphabetical)
+    and in the order each module defines them, then any others in registration
+    order -- the same list whichever module happened to be imported first."""
     _load()
-    return list(_REGISTRY)
+    seq = {n: i for i, n in enumerate(_REGISTRY)}
+
+    def key(n):
+        mod = _REGISTRY[n].cls.__module__
+        own = mod.startswith("plausible.models.")
+        return (not own, mod if own else "", seq[n])
+
+    return sorted(_REGISTRY, key=key)
 
 
 def info(name: str) -> ModelInfo:
