@@ -1,0 +1,279 @@
+"""Which array library runs the model hooks of the float64 library: NumPy or Dr.Jit.
+
+The NumPy front end (:meth:`plausible.bxdf.BxDF.eval`, ``pdf``, ``sample``) and
+the analysis built on it validate their input and shape their output with
+NumPy, and hand the arithmetic, the hooks ``_f``, ``_pdf`` and ``_sample``, to
+one of two backends of the same formulas:
+
+* ``"numpy"`` -- :data:`plausible.ops.NP`, one temporary array per operation;
+* ``"drjit"`` -- :func:`plausible.ops.drjit_ops` on ``drjit.llvm.Float64``: the
+  hooks are traced once per call into one LLVM kernel (float64, all cores),
+  compiled on first use and then taken from Dr.Jit's kernel cache (in memory,
+  and on disk in ``~/.drjit``) whenever the formula's shape and constants are
+  the same (parameters are constants of the kernel; directions are not).
+
+The rule (see ``docs/backends.md``):
+
+1. the ``backend=`` keyword of ``eval``/``pdf``/``sample``, else the innermost
+   :func:`use` block, else the environment variable ``PLAUSIBLE_BACKEND``, else
+   ``"auto"``, names the request: ``"auto"``, ``"numpy"`` or ``"drjit"``;
+2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
+   and the call has at least :data:`AUTO_MIN_ROWS` direction pairs (below that,
+   tracing costs more than NumPy's arithmetic), NumPy otherwise;
+3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
+4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
+   directly, such as a measured MERL table) runs on NumPy whatever was asked:
+   the first failing call is repeated on NumPy and the model is remembered.
+
+Colour models: Dr.Jit runs ``rows x channels`` lanes, each lane one channel of
+one pair, with every colour parameter read per lane from a small table: the
+same element-wise arithmetic as NumPy's broadcasting of a trailing channel axis.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import os
+import weakref
+from functools import lru_cache
+
+import numpy as np
+
+#: The environment variable naming the default request.
+ENV = "PLAUSIBLE_BACKEND"
+#: Allowed requests.
+CHOICES = ("auto", "numpy", "drjit")
+#: ``auto`` uses Dr.Jit from this many direction pairs per call (measured on the
+#: development machine: below ~10^5 pairs, tracing and, for a new parameter
+#: set, compiling the kernel cost more than NumPy; see docs/backends.md).
+AUTO_MIN_ROWS = 1 << 17
+
+_REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
+#: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
+_NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
+
+
+def _checked(name, source: str) -> str:
+    if name not in CHOICES:
+        raise ValueError(f"{source} must be one of {', '.join(CHOICES)}; got {name!r}")
+    return name
+
+
+def requested(backend: str | None = None) -> str:
+    """The request in force: ``backend`` if given, else the innermost :func:`use`,
+    else ``$PLAUSIBLE_BACKEND``, else ``"auto"``."""
+    if backend is not None:
+        return _checked(backend, "backend")
+    cur = _REQUEST.get()
+    if cur is not None:
+        return cur
+    env = os.environ.get(ENV)
+    if env:
+        return _checked(env.strip().lower(), f"environment variable {ENV}")
+    return "auto"
+
+
+@contextlib.contextmanager
+def use(backend: str):
+    """Run the enclosed code with ``backend`` (``"auto"``, ``"numpy"`` or ``"drjit"``)
+    as the request of every ``eval``/``pdf``/``sample`` call, including those
+    the analysis makes:
+
+    >>> import plausible
+    >>> with plausible.use_backend("numpy"):
+    ...     round(float(plausible.make("lambertian", rd=0.5).eval([0, 0, 1], [0, 0, 1])), 6)
+    0.159155
+    """
+    token = _REQUEST.set(_checked(backend, "backend"))
+    try:
+        yield
+    finally:
+        _REQUEST.reset(token)
+
+
+@lru_cache(maxsize=None)
+def drjit_available() -> bool:
+    """Dr.Jit is importable and its LLVM backend runs (libLLVM found)."""
+    try:
+        import drjit as dr
+        from drjit.llvm import Float64
+
+        if not dr.has_backend(dr.JitBackend.LLVM):
+            return False
+        x = Float64([1.0, 2.0])
+        return float(dr.sum(x * x)[0]) == 5.0
+    except Exception:  # noqa: BLE001 - any failure (missing package, no libLLVM) means "not available"
+        return False
+
+
+def choose(rows: int, model=None, backend: str | None = None) -> str:
+    """``"numpy"`` or ``"drjit"`` for a call on ``rows`` direction pairs (see the module rule)."""
+    req = requested(backend)
+    if req == "numpy" or (model is not None and model in _NUMPY_ONLY):
+        return "numpy"
+    if req == "drjit":
+        if not drjit_available():
+            raise ValueError(f"backend 'drjit' was asked for ({ENV} or backend=), but Dr.Jit with "
+                             f"its LLVM backend is not available; install the 'render' extra "
+                             f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
+        return "drjit"
+    return "drjit" if rows >= AUTO_MIN_ROWS and drjit_available() else "numpy"
+
+
+def run(model, kind: str, numpy_fn, drjit_fn):
+    """``drjit_fn()``; if the model's hooks fail on Dr.Jit arrays, remember the model
+    as NumPy-only and return ``numpy_fn()``."""
+    try:
+        return drjit_fn()
+    except _NotJit:
+        pass
+    except (TypeError, AttributeError, ValueError, RuntimeError, IndexError):
+        # a hook that calls NumPy on Dr.Jit arrays, or uses Python ``if`` on them
+        pass
+    _NUMPY_ONLY.add(model)
+    return numpy_fn()
+
+
+class _NotJit(Exception):
+    """A hook returned something that is not a Dr.Jit array or a number."""
+
+
+# -- Dr.Jit evaluation of the hooks ------------------------------------------------------
+
+def _dr():
+    import drjit as dr
+    from drjit.llvm import Float64, UInt32
+
+    from .ops import drjit_ops
+
+    return dr, Float64, UInt32, drjit_ops(Float64)
+
+
+class _Lanes:
+    """The Dr.Jit view of one block: ``rows`` pairs, ``reps`` lanes per row
+    (``reps`` = channel count for a colour evaluation, else 1)."""
+
+    def __init__(self, rows: int, reps: int = 1):
+        dr, self.Float64, self.UInt32, self.ops = _dr()
+        self.dr = dr
+        self.rows, self.reps = rows, reps
+        lane = dr.arange(self.UInt32, rows * reps)
+        self.row = lane // reps if reps > 1 else lane
+        self.chan = lane % reps if reps > 1 else None
+
+    def vectors(self, a: np.ndarray):
+        """Components of ``a`` (``(3,)`` or ``(rows, 3)``) as lane arrays; one vector
+        is an opaque scalar (a kernel input, not a constant: the kernel is reused
+        for every other vector)."""
+        dr, F = self.dr, self.Float64
+        if a.size == 3:
+            return tuple(dr.opaque(F, float(x)) for x in a.reshape(3))
+        flat = F(np.ascontiguousarray(a, dtype=np.float64).reshape(-1))
+        return tuple(dr.gather(F, flat, self.row * 3 + k) for k in range(3))
+
+    def gather_rows(self, x):
+        """A per-row array (``rows`` lanes) read per lane (``rows x reps``)."""
+        if self.reps == 1 or not _is_jit(x):
+            return x
+        return self.dr.gather(self.Float64, x, self.row)
+
+    def params(self, p):
+        """``p`` with each channel array read per lane (channels as lanes)."""
+        if self.reps == 1:
+            return p
+        vals = {}
+        for k, v in vars(p).items():
+            if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == self.reps:
+                v = self.dr.gather(self.Float64, self.Float64(v.astype(np.float64)), self.chan)
+            vals[k] = v
+        return type(p)(**vals)
+
+    def numpy(self, x, lanes: int) -> np.ndarray:
+        """A hook's result as a NumPy array of ``lanes`` values."""
+        if isinstance(x, (int, float, bool, np.bool_)) and not isinstance(x, np.ndarray):
+            return np.full(lanes, float(x))
+        if not _is_jit(x):
+            raise _NotJit(type(x).__name__)
+        a = np.asarray(self.Float64(x).numpy(), dtype=np.float64)
+        if a.size == 1 and lanes != 1:
+            return np.full(lanes, a[0])
+        if a.size != lanes:
+            raise _NotJit(f"{a.size} values for {lanes} lanes")
+        return a
+
+
+def _is_jit(x) -> bool:
+    import drjit as dr
+
+    return dr.is_array_v(x)
+
+
+def _rows(a: np.ndarray, shape: tuple) -> np.ndarray:
+    """``a`` broadcast to ``shape + (3,)`` as ``(3,)`` (one vector) or ``(rows, 3)``."""
+    if a.size == 3:
+        return a.reshape(3)
+    return np.broadcast_to(a, shape + (3,)).reshape(-1, 3)
+
+
+def eval_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarray:
+    """``model._f`` on Dr.Jit for unit ``wi``, ``wo`` broadcast to ``shape``; NumPy
+    array of ``shape`` (plus the channel axis)."""
+    n = int(np.prod(shape))
+    c = model.channels or 1
+    L = _Lanes(n, c)
+    f = model._f(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), L.params(model.p))
+    out = L.numpy(f, n * c)
+    return out.reshape(shape + ((model.channels,) if model.channels else ()))
+
+
+def pdf_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarray:
+    """``model._pdf`` on Dr.Jit (as :func:`eval_block`; no channel axis)."""
+    n = int(np.prod(shape))
+    L = _Lanes(n)
+    v = model._pdf(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), model.q)
+    return L.numpy(v, n).reshape(shape)
+
+
+def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: float):
+    """``model._sample`` on Dr.Jit with the front end's bookkeeping (see
+    :meth:`plausible.bxdf.BxDF._sample_block`, whose steps this repeats in the same
+    order): normalise ``wo`` (a zero vector becomes ``(0, 0, -1)``), its pdf, ``f``,
+    the validity mask, ``weight = f cos / pdf``.  Returns ``(wo, weight, pdf)``."""
+    n = int(np.prod(shape))
+    L = _Lanes(n)
+    dr, ops = L.dr, L.ops
+    wi_c = L.vectors(_rows(wi, shape))
+    u_c = L.vectors(_rows(u, shape))
+    wo_c = model._sample(ops, wi_c, u_c, model.q)
+    wo_c = tuple(x if _is_jit(x) else L.Float64(float(x)) for x in wo_c)
+    if not all(_is_jit(x) for x in wo_c):
+        raise _NotJit("sample")
+    x, y, z = wo_c
+    nrm = dr.sqrt(x * x + y * y + z * z)
+    pos = nrm > 0
+    den = dr.select(pos, nrm, 1.0)
+    x, y, z = (dr.select(pos, x / den, 0.0), dr.select(pos, y / den, 0.0), dr.select(pos, z / den, -1.0))
+    wo_c = (x, y, z)
+    pdf = model._pdf(ops, wi_c, wo_c, model.q)
+    ok = (pdf > 1e-250) & (z > horizon) & (wi_c[2] > horizon)
+    cos_over_pdf = dr.select(ok, z / dr.select(ok, pdf, 1.0), 0.0)
+    pdf = dr.select(ok, pdf, 0.0)
+    if model.channels:
+        c = model.channels
+        dr.eval(x, y, z, cos_over_pdf, pdf)
+        C = _Lanes(n, c)
+        wo_l = tuple(C.gather_rows(v) for v in (x, y, z))
+        wi_l = C.vectors(_rows(wi, shape))
+        f = model._f(ops, wi_l, wo_l, C.params(model.p))
+        r = C.gather_rows(cos_over_pdf)
+        okc = C.gather_rows(dr.select(ok, 1.0, 0.0)) > 0.5
+        weight = L.numpy(dr.select(okc, f * r, 0.0), n * c).reshape(shape + (c,))
+    else:
+        f = model._f(ops, wi_c, wo_c, model.p)
+        weight = L.numpy(dr.select(ok, f * cos_over_pdf, 0.0), n).reshape(shape)
+    wo = np.stack([L.numpy(v, n) for v in wo_c], axis=-1).reshape(shape + (3,))
+    return wo, weight, L.numpy(pdf, n).reshape(shape)
+
+
+__all__ = ["AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "requested", "use"]
