@@ -277,3 +277,82 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
 
 
 __all__ = ["AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "requested", "use"]
+
+
+# -- quadrature sums on Dr.Jit ------------------------------------------------------------
+
+#: Largest number of lanes (nodes x channels) of one quadrature launch.
+MAX_LANES = 1 << 27
+
+
+def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w) -> np.ndarray:
+    """Tensor-product quadrature sums for many incidences in one Dr.Jit launch:
+
+    ``S[a] = sum_ij theta_w[a, i] phi_w[a, j] g(wis[a], wo(theta[a, i], phi[a, j]))``
+
+    with ``g = f cos(theta_o)`` (``kind="f"``, one sum per channel) or the pdf
+    (``kind="pdf"``); ``wo(theta, phi) = (sin t cos p, sin t sin p, cos t)``.  The node
+    arrays have one row per incidence, padded with zero weights to a common
+    length.  Every size enters the kernel as data (opaque), so the kernel is
+    traced and compiled once per model and reused for any grid.  Returns ``(A,)``
+    or ``(A, channels)``."""
+    dr, F, U, ops = _dr()
+    A, nt = theta.shape
+    npp = phi.shape[1]
+    c = (model.channels or 1) if kind == "f" else 1
+    per = nt * npp * c
+    group = max(1, MAX_LANES // max(per, 1))
+    out = []
+    for s in range(0, A, group):
+        e = min(s + group, A)
+        out.append(_grid_sums(dr, F, U, ops, model, kind, wis[s:e], theta[s:e], theta_w[s:e],
+                              phi[s:e], phi_w[s:e], c))
+    res = np.concatenate(out)
+    return res.reshape(A, c) if kind == "f" and model.channels else res
+
+
+def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c):
+    A, nt = theta.shape
+    npp = phi.shape[1]
+    lanes = A * nt * npp * c
+    # lane = ((a * nt + i) * np + j) * c + chan, split with float64 arithmetic (exact
+    # for fewer than 2^40 lanes; a vectorised multiply-floor is much faster than
+    # integer division, which LLVM does lane by lane)
+    lane = F(dr.arange(U, lanes))
+
+    def divmod_(x, d):
+        q = dr.floor((x + 0.5) * dr.opaque(F, 1.0 / d))
+        return q, x - q * dr.opaque(F, float(d))
+
+    pt, chan = divmod_(lane, c) if c > 1 else (lane, None)
+    row, j = divmod_(pt, npp)
+    a, i = divmod_(row, nt)
+    ti, pj, a = U(row), U(a * dr.opaque(F, float(npp)) + j), U(a)
+    chan = U(chan) if c > 1 else dr.zeros(U, 1)
+    cc = dr.opaque(U, c)
+
+    def table(x):
+        return F(np.ascontiguousarray(x, dtype=np.float64).ravel())
+
+    st, ct, wt = (dr.gather(F, table(x), ti) for x in (np.sin(theta), np.cos(theta), theta_w))
+    cp, sp, wp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi), phi_w))
+    wo = (st * cp, st * sp, ct)
+    wi = tuple(dr.gather(F, table(wis[:, k]), a) for k in range(3))
+    if kind == "f":
+        p = model.p
+        if model.channels:
+            vals = {}
+            for k, v in vars(p).items():
+                if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == c:
+                    v = dr.gather(F, table(v), chan)
+                vals[k] = v
+            p = type(p)(**vals)
+        g = model._f(ops, wi, wo, p) * ct
+    else:
+        g = model._pdf(ops, wi, wo, model.q)
+    if not (_is_jit(g) or isinstance(g, (int, float))):
+        raise _NotJit(type(g).__name__)
+    v = F(g) * (wt * wp)
+    total = dr.zeros(F, A * c)
+    dr.scatter_reduce(dr.ReduceOp.Add, total, v, a * cc + chan)
+    return np.asarray(total.numpy(), dtype=np.float64)
