@@ -18,8 +18,9 @@ The rule (see ``docs/backends.md``):
    :func:`use` block, else the environment variable ``PLAUSIBLE_BACKEND``, else
    ``"auto"``, names the request: ``"auto"``, ``"numpy"`` or ``"drjit"``;
 2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
-   and the call has at least :data:`AUTO_MIN_ROWS` direction pairs (below that,
-   tracing costs more than NumPy's arithmetic), NumPy otherwise;
+   and the call has at least :data:`AUTO_MIN_ROWS` direction pairs
+   (:data:`AUTO_MIN_NODES` quadrature nodes; below that, tracing and compiling
+   cost more than NumPy's arithmetic), NumPy otherwise;
 3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
 4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
    directly, such as a measured MERL table) runs on NumPy whatever was asked:
@@ -44,10 +45,15 @@ import numpy as np
 ENV = "PLAUSIBLE_BACKEND"
 #: Allowed requests.
 CHOICES = ("auto", "numpy", "drjit")
-#: ``auto`` uses Dr.Jit from this many direction pairs per call (measured on the
-#: development machine: below ~10^5 pairs, tracing and, for a new parameter
-#: set, compiling the kernel cost more than NumPy; see docs/backends.md).
-AUTO_MIN_ROWS = 1 << 17
+#: ``auto`` uses Dr.Jit for ``eval``/``pdf``/``sample`` from this many direction
+#: pairs per call.  Measured on the development machine (docs/backends.md): with
+#: the kernel compiled, Dr.Jit is as fast as NumPy from about 4,000 pairs and
+#: 10x faster from 65,000; a kernel not seen before (a new model or parameter
+#: set) costs 30-100 ms to compile once, which NumPy repays only at about 30,000.
+AUTO_MIN_ROWS = 1 << 15
+#: The same for quadrature (:mod:`plausible.analysis.albedo`): its kernel does
+#: not depend on the grid or the incidence, so it is compiled once per model.
+AUTO_MIN_NODES = 1 << 14
 
 _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
 #: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
@@ -107,8 +113,9 @@ def drjit_available() -> bool:
         return False
 
 
-def choose(rows: int, model=None, backend: str | None = None) -> str:
-    """``"numpy"`` or ``"drjit"`` for a call on ``rows`` direction pairs (see the module rule)."""
+def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AUTO_MIN_ROWS) -> str:
+    """``"numpy"`` or ``"drjit"`` for a call on ``rows`` direction pairs (see the
+    module rule; ``auto`` picks Dr.Jit from ``min_rows``)."""
     req = requested(backend)
     if req == "numpy" or (model is not None and model in _NUMPY_ONLY):
         return "numpy"
@@ -118,7 +125,7 @@ def choose(rows: int, model=None, backend: str | None = None) -> str:
                              f"its LLVM backend is not available; install the 'render' extra "
                              f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
         return "drjit"
-    return "drjit" if rows >= AUTO_MIN_ROWS and drjit_available() else "numpy"
+    return "drjit" if rows >= min_rows and drjit_available() else "numpy"
 
 
 def run(model, kind: str, numpy_fn, drjit_fn):
@@ -276,7 +283,6 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
     return wo, weight, L.numpy(pdf, n).reshape(shape)
 
 
-__all__ = ["AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "requested", "use"]
 
 
 # -- quadrature sums on Dr.Jit ------------------------------------------------------------
@@ -285,7 +291,7 @@ __all__ = ["AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "requ
 MAX_LANES = 1 << 27
 
 
-def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w) -> np.ndarray:
+def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w, per_phi: bool = False) -> np.ndarray:
     """Tensor-product quadrature sums for many incidences in one Dr.Jit launch:
 
     ``S[a] = sum_ij theta_w[a, i] phi_w[a, j] g(wis[a], wo(theta[a, i], phi[a, j]))``
@@ -295,23 +301,28 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w) -> 
     arrays have one row per incidence, padded with zero weights to a common
     length.  Every size enters the kernel as data (opaque), so the kernel is
     traced and compiled once per model and reused for any grid.  Returns ``(A,)``
-    or ``(A, channels)``."""
+    or ``(A, channels)``; with ``per_phi`` (``kind="pdf"`` only) the sums over ``i``
+    alone, ``(A, n_phi)``."""
     dr, F, U, ops = _dr()
     A, nt = theta.shape
     npp = phi.shape[1]
     c = (model.channels or 1) if kind == "f" else 1
+    if per_phi and c != 1:
+        raise ValueError("grid_sums: per_phi sums are for kind='pdf' or a scalar f")
     per = nt * npp * c
     group = max(1, MAX_LANES // max(per, 1))
     out = []
     for s in range(0, A, group):
         e = min(s + group, A)
         out.append(_grid_sums(dr, F, U, ops, model, kind, wis[s:e], theta[s:e], theta_w[s:e],
-                              phi[s:e], phi_w[s:e], c))
+                              phi[s:e], phi_w[s:e], c, per_phi))
     res = np.concatenate(out)
+    if per_phi:
+        return res.reshape(A, npp)
     return res.reshape(A, c) if kind == "f" and model.channels else res
 
 
-def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c):
+def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi):
     A, nt = theta.shape
     npp = phi.shape[1]
     lanes = A * nt * npp * c
@@ -353,6 +364,14 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c):
     if not (_is_jit(g) or isinstance(g, (int, float))):
         raise _NotJit(type(g).__name__)
     v = F(g) * (wt * wp)
-    total = dr.zeros(F, A * c)
-    dr.scatter_reduce(dr.ReduceOp.Add, total, v, a * cc + chan)
+    if per_phi:
+        total = dr.zeros(F, A * npp)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, v, pj)
+    else:
+        total = dr.zeros(F, A * c)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, v, a * cc + chan)
     return np.asarray(total.numpy(), dtype=np.float64)
+
+
+__all__ = ["AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "grid_sums",
+           "requested", "use"]

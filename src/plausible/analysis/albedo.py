@@ -86,7 +86,7 @@ def _sums(model, kind, rules, requests):
         return
     grids = [rules[a].nodes(m, r) for a, m, r in requests]
     total = sum(len(g[0]) * len(g[2]) for g in grids)
-    if isinstance(model, BxDF) and _backend.choose(total, model) == "drjit":
+    if isinstance(model, BxDF) and _backend.choose(total, model, min_rows=_backend.AUTO_MIN_NODES) == "drjit":
         def numpy():
             return [_grid_sum(model, kind, rules[a].wi, g) for (a, _, _), g in zip(requests, grids)]
 
@@ -129,6 +129,30 @@ def _grid_sum(model, kind, wi, grid):
     if vals.ndim == w.ndim + 1:
         w = w[..., None]
     return np.sum(vals * w, axis=(0, 1))
+
+
+def pdf_phi_sums(model, wi, theta, theta_w, phi) -> np.ndarray:
+    """``sum_i theta_w[i] pdf(wi, wo(theta[i], phi[j]))`` for every ``j``: a tensor
+    rule's pdf integrated over ``theta`` at each azimuth node (the chi-square
+    test's cells, :mod:`plausible.analysis.chi2`).  One Dr.Jit launch when the
+    backend rule says so, else ``model.pdf`` on the grid."""
+    theta, theta_w, phi = (np.asarray(x, dtype=np.float64) for x in (theta, theta_w, phi))
+    wi = np.asarray(wi, dtype=np.float64)
+    n = len(theta) * len(phi)
+    if isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES) == "drjit":
+        def jit():
+            return _backend.grid_sums(model, "pdf", wi[None, :], theta[None, :], theta_w[None, :],
+                                      phi[None, :], np.ones((1, len(phi))), per_phi=True)[0]
+
+        return _backend.run(model, "quadrature", lambda: _numpy_phi_sums(model, wi, theta, theta_w, phi), jit)
+    return _numpy_phi_sums(model, wi, theta, theta_w, phi)
+
+
+def _numpy_phi_sums(model, wi, theta, theta_w, phi):
+    st = np.sin(theta)
+    wo = np.stack(np.broadcast_arrays(st[:, None] * np.cos(phi)[None, :],
+                                      st[:, None] * np.sin(phi)[None, :], np.cos(theta)[:, None]), axis=-1)
+    return (model.pdf(wi, wo) * theta_w[:, None]).sum(axis=0)
 
 
 def _integrate(model, kind, wis, tol, levels):
@@ -226,6 +250,13 @@ def pdf_integral(model, wi, *, tol: float = TOL, levels: int = 13) -> AlbedoResu
     refined to ``tol`` like :func:`albedo`."""
     r = _results(model, "pdf", [_unit_incidence(wi)], _check_tol(tol), levels)[0]
     return AlbedoResult(float(r.value), float(r.error))
+
+
+def pdf_integrals(model, wis, *, tol: float = TOL, levels: int = 13) -> list:
+    """:func:`pdf_integral` at many incidences, refined together (like :func:`albedos`)."""
+    tol = _check_tol(tol)
+    res = _results(model, "pdf", [_unit_incidence(w) for w in wis], tol, levels)
+    return [AlbedoResult(float(r.value), float(r.error)) for r in res]
 
 
 def albedo_curve(model, thetas, phi: float = 0.0, progress=None, **kw) -> AlbedoResult:

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .albedo import albedo, direction, is_isotropic, pdf_integral
+from .albedo import albedos, direction, is_isotropic, pdf_integrals
 
 #: Incidence angles (degrees) of the default energy grid: dense toward grazing.
 ENERGY_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9)
@@ -107,8 +107,8 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     dirs = energy_directions(model, thetas_deg, phis_deg)
     best = (-math.inf, None, None)
     curve = []
-    for t, p in dirs:
-        r = albedo(model, direction(math.radians(t), math.radians(p)))
+    res = albedos(model, [direction(math.radians(t), math.radians(p)) for t, p in dirs])
+    for (t, p), r in zip(dirs, res):
         v = float(np.max(r.value))
         e = float(np.max(r.error))
         curve.append((t, p, v, e))
@@ -145,9 +145,13 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
     problems = []
     if is_isotropic(model):
         phis_deg = (0,)
+    # the deterministic integrals (pdf, albedo) of every incidence, refined together
+    wis = [direction(math.radians(t), math.radians(p)) for p in phis_deg for t in thetas_deg]
+    integrals = iter(zip(pdf_integrals(model, wis), albedos(model, wis)))
     for p in phis_deg:
         for t in thetas_deg:
             wi = direction(math.radians(t), math.radians(p))
+            pint, ref = next(integrals)
             u = rng.random((n_samples, 3))
             s = model.sample(wi, u)
             valid = s.pdf > 0
@@ -160,13 +164,11 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
             perr = np.max(np.abs(pdf2 - s.pdf) / np.maximum(np.abs(s.pdf), 1e-12))
             bad_nonfinite = not (np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.pdf)))
             inv = 1.0 - valid.mean()
-            pint = pdf_integral(model, wi)
             sig_inv = math.sqrt(max(inv * (1 - inv), 1.0 / n_samples) / n_samples)
             inv_mis = abs((1.0 - pint.value) - inv) / (sig_inv + pint.error)
             w = s.weight if s.weight.ndim == 1 else s.weight.mean(axis=-1)
             mc = w.mean()
             se = w.std(ddof=1) / math.sqrt(n_samples)
-            ref = albedo(model, wi)
             refv = float(np.mean(ref.value))
             alb_mis = abs(mc - refv) / (se + float(np.mean(ref.error)) + 1e-9)
             here = dict(theta_i_deg=t, phi_i_deg=p)
