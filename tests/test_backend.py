@@ -75,6 +75,12 @@ def test_bad_backend_names_are_refused_with_the_choices(monkeypatch):
 def test_auto_picks_drjit_for_large_batches_only():
     assert backend.choose(10) == "numpy"
     assert backend.choose(backend.AUTO_MIN_ROWS) == "drjit"
+    # a model not yet compiled needs a batch worth the compilation, then less
+    m = plausible.make("ashikhmin-shirley", nu=12.345, nv=67.89)
+    assert backend.choose(backend.AUTO_MIN_ROWS, m) == "numpy"
+    assert backend.choose(backend.AUTO_MIN_NEW, m) == "drjit"
+    assert backend.choose(backend.AUTO_MIN_ROWS, m) == "drjit"
+    assert backend.choose(backend.AUTO_MIN_ROWS, plausible.make("ashikhmin-shirley", nu=12.345, nv=67.9)) == "numpy"
     with backend.use("numpy"):
         assert backend.choose(10 ** 7) == "numpy"
     with backend.use("drjit"):

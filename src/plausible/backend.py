@@ -19,8 +19,9 @@ The rule (see ``docs/backends.md``):
    ``"auto"``, names the request: ``"auto"``, ``"numpy"`` or ``"drjit"``;
 2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
    and the call has at least :data:`AUTO_MIN_ROWS` direction pairs
-   (:data:`AUTO_MIN_NODES` quadrature nodes; below that, tracing and compiling
-   cost more than NumPy's arithmetic), NumPy otherwise;
+   (:data:`AUTO_MIN_NODES` quadrature nodes; :data:`AUTO_MIN_NEW` for a model
+   and parameter set not yet compiled in this process; below that, tracing and
+   compiling cost more than NumPy's arithmetic), NumPy otherwise;
 3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
 4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
    directly, such as a measured MERL table) runs on NumPy whatever was asked:
@@ -54,8 +55,15 @@ AUTO_MIN_ROWS = 1 << 15
 #: The same for quadrature (:mod:`plausible.analysis.albedo`): its kernel does
 #: not depend on the grid or the incidence, so it is compiled once per model.
 AUTO_MIN_NODES = 1 << 14
+#: The thresholds above hold once a model (its class and parameters) has run on
+#: Dr.Jit in this process; before that ``auto`` asks for this many, where NumPy
+#: takes longer than compiling a kernel (a fit's objective, which makes a new
+#: parameter set at every step, so stays on NumPy for its small batches).
+AUTO_MIN_NEW = 1 << 18
 
 _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
+#: ``(kernel, class, repr)`` of the models ``auto`` has sent to Dr.Jit (compiled).
+_TRACED: set = set()
 #: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
 _NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
 
@@ -113,9 +121,11 @@ def drjit_available() -> bool:
         return False
 
 
-def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AUTO_MIN_ROWS) -> str:
+def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AUTO_MIN_ROWS,
+           kernel: str = "eval") -> str:
     """``"numpy"`` or ``"drjit"`` for a call on ``rows`` direction pairs (see the
-    module rule; ``auto`` picks Dr.Jit from ``min_rows``)."""
+    module rule; ``auto`` picks Dr.Jit from ``min_rows``, or :data:`AUTO_MIN_NEW`
+    for the first ``kernel`` of a model with these parameters)."""
     req = requested(backend)
     if req == "numpy" or (model is not None and model in _NUMPY_ONLY):
         return "numpy"
@@ -125,7 +135,13 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
                              f"its LLVM backend is not available; install the 'render' extra "
                              f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
         return "drjit"
-    return "drjit" if rows >= min_rows and drjit_available() else "numpy"
+    if model is not None and (kernel, type(model), repr(model)) not in _TRACED:
+        min_rows = max(min_rows, AUTO_MIN_NEW)
+    if rows >= min_rows and drjit_available():
+        if model is not None:
+            _TRACED.add((kernel, type(model), repr(model)))
+        return "drjit"
+    return "numpy"
 
 
 def run(model, kind: str, numpy_fn, drjit_fn):
@@ -373,5 +389,5 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     return np.asarray(total.numpy(), dtype=np.float64)
 
 
-__all__ = ["AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "grid_sums",
+__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available", "grid_sums",
            "requested", "use"]

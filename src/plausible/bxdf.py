@@ -253,7 +253,7 @@ class BxDF:
         (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
-        be = _backend.choose(n, self, backend)
+        be = _backend.choose(n, self, backend, kernel="eval")
         if n <= CHUNK:
             return self._eval_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape, be)
         out = np.empty((n,) + self._out_shape(())[:1])
@@ -275,7 +275,7 @@ class BxDF:
         (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
-        be = _backend.choose(n, self, backend)
+        be = _backend.choose(n, self, backend, kernel="pdf")
         if n <= CHUNK:
             return self._pdf_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape, be)
         out = np.empty(n)
@@ -298,7 +298,7 @@ class BxDF:
         u = _as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         n = int(np.prod(shape))
-        be = _backend.choose(n, self, backend)
+        be = _backend.choose(n, self, backend, kernel="sample")
         ni = _unit_fn(wi_unit)
         if n <= CHUNK:
             return self._sample_block(ni(wi), u, shape, be)

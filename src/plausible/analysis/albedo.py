@@ -86,7 +86,8 @@ def _sums(model, kind, rules, requests):
         return
     grids = [rules[a].nodes(m, r) for a, m, r in requests]
     total = sum(len(g[0]) * len(g[2]) for g in grids)
-    if isinstance(model, BxDF) and _backend.choose(total, model, min_rows=_backend.AUTO_MIN_NODES) == "drjit":
+    if isinstance(model, BxDF) and _backend.choose(total, model, min_rows=_backend.AUTO_MIN_NODES,
+                                                   kernel="quad-" + kind) == "drjit":
         def numpy():
             return [_grid_sum(model, kind, rules[a].wi, g) for (a, _, _), g in zip(requests, grids)]
 
@@ -139,7 +140,8 @@ def pdf_phi_sums(model, wi, theta, theta_w, phi) -> np.ndarray:
     theta, theta_w, phi = (np.asarray(x, dtype=np.float64) for x in (theta, theta_w, phi))
     wi = np.asarray(wi, dtype=np.float64)
     n = len(theta) * len(phi)
-    if isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES) == "drjit":
+    if isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES,
+                                                   kernel="phi-pdf") == "drjit":
         def jit():
             return _backend.grid_sums(model, "pdf", wi[None, :], theta[None, :], theta_w[None, :],
                                       phi[None, :], np.ones((1, len(phi))), per_phi=True)[0]
