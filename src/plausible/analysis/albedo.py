@@ -335,8 +335,10 @@ def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_thet
     the largest channel.  The polar grid starts with ``n_theta`` nodes (2 degrees)
     and is halved while the interpolation error, estimated at the new nodes from
     the coarser table and divided by 8 (the ``O(h^3)`` rate), exceeds ``tol``, up to
-    ``max_theta`` nodes.  The node on the horizon is evaluated 1e-6 rad above it
-    (at exactly 90 degrees the albedo is zero by convention, not by continuity).
+    ``max_theta`` nodes; each node's albedo is integrated to ``tol / 10`` (all the
+    nodes of a step together, :func:`albedos`).  The node on the horizon is
+    evaluated 1e-6 rad above it (at exactly 90 degrees the albedo is zero by
+    convention, not by continuity).
     ``progress``, if given, is called with the number of albedo evaluations just done.
     """
     from ..tables import HALF_PI, AngleTable
@@ -347,9 +349,10 @@ def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_thet
 
     def columns(ths):
         """Albedos at polar angles ``ths`` (all azimuths), integrated together to
-        ``tol / 100`` (a small share of the table's error budget)."""
+        ``tol / 10`` (a share of the error budget: node errors add at most 10 % to
+        the interpolation error)."""
         dirs = [direction(min(t, HALF_PI - 1e-6), ph) for t in ths for ph in phis]
-        res = albedos(model, dirs, tol=tol / 100)
+        res = albedos(model, dirs, tol=tol / 10)
         vals = np.array([np.max(np.atleast_1d(r.value)) for r in res]).reshape(len(ths), len(phis))
         if progress:
             for _ in ths:
