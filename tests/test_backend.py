@@ -85,6 +85,10 @@ def test_auto_picks_drjit_for_large_batches_only():
         assert backend.choose(10 ** 7) == "numpy"
     with backend.use("drjit"):
         assert backend.choose(1) == "drjit"
+        assert backend.choose(0) == "numpy"      # nothing to trace
+        m = plausible.make("lambertian")
+        assert m.eval(np.zeros((0, 3)), [0, 0, 1]).shape == (0,)
+        assert backend.choose(1, m) == "drjit"  # not marked NumPy-only by the empty call
 
 
 class _NumpyHooks(BxDF):

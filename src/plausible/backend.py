@@ -127,7 +127,7 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
     module rule; ``auto`` picks Dr.Jit from ``min_rows``, or :data:`AUTO_MIN_NEW`
     for the first ``kernel`` of a model with these parameters)."""
     req = requested(backend)
-    if req == "numpy" or (model is not None and model in _NUMPY_ONLY):
+    if req == "numpy" or rows == 0 or (model is not None and model in _NUMPY_ONLY):
         return "numpy"
     if req == "drjit":
         if not drjit_available():
