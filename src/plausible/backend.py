@@ -307,7 +307,8 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
 MAX_LANES = 1 << 27
 
 
-def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w, per_phi: bool = False) -> np.ndarray:
+def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
+              per_phi: bool = False) -> np.ndarray:
     """Tensor-product quadrature sums for many incidences in one Dr.Jit launch:
 
     ``S[a] = sum_ij theta_w[a, i] phi_w[a, j] g(wis[a], wo(theta[a, i], phi[a, j]))``
