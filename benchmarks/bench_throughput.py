@@ -2,7 +2,11 @@
 
 Backends, side by side in one process:
 
-* ``numpy``   -- the NumPy contract ``model.eval/pdf/sample`` (float64, one thread);
+* ``numpy``   -- the NumPy contract ``model.eval/pdf/sample`` on its NumPy backend
+  (``backend="numpy"``: float64, one thread);
+* ``api-drjit`` -- the same NumPy-facing calls on the Dr.Jit backend
+  (``backend="drjit"``: NumPy in, NumPy out, the hooks on ``drjit.llvm.Float64``;
+  validation and conversion included);
 * ``drjit``   -- the model's hooks ``_f``, ``_pdf``, ``_sample`` (+ ``_pdf``, ``_f``
   for the weight, as the plugin does) on ``mi.Float`` (Dr.Jit LLVM, float32),
   colours as ``mi.Color3f``;
@@ -42,10 +46,28 @@ def pedantic(benchmark, fn, warm=False):
 def test_numpy(benchmark, pairs, name, op):
     m = plausible.make(name)
     wi, wo, u = pairs
-    fn = {"eval": lambda: m.eval(wi, wo), "pdf": lambda: m.pdf(wi, wo),
-          "sample": lambda: m.sample(wi, u)}[op]
+    fn = {"eval": lambda: m.eval(wi, wo, backend="numpy"), "pdf": lambda: m.pdf(wi, wo, backend="numpy"),
+          "sample": lambda: m.sample(wi, u, backend="numpy")}[op]
     record(benchmark, f"throughput-{op}", name, backend="numpy", op=op, n=N,
            peak_bytes=traced_peak(fn))
+    pedantic(benchmark, fn)
+
+
+@pytest.mark.drjit
+@pytest.mark.parametrize("op", OPS)
+@pytest.mark.parametrize("name", MODELS)
+def test_api_drjit(benchmark, pairs, name, op):
+    """The NumPy-facing API on the Dr.Jit float64 backend (what ``auto`` picks for
+    these batches when Dr.Jit is installed)."""
+    from plausible import backend
+
+    if not backend.drjit_available():
+        pytest.skip("Dr.Jit LLVM backend unavailable")
+    m = plausible.make(name)
+    wi, wo, u = pairs
+    fn = {"eval": lambda: m.eval(wi, wo, backend="drjit"), "pdf": lambda: m.pdf(wi, wo, backend="drjit"),
+          "sample": lambda: m.sample(wi, u, backend="drjit")}[op]
+    record(benchmark, f"throughput-{op}", name, backend="api-drjit", op=op, n=N, first_call_s=first_call(fn))
     pedantic(benchmark, fn)
 
 

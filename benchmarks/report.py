@@ -21,14 +21,15 @@ def main(path):
     print(f"Machine: {cpu.get('brand_raw', '?')} ({cpu.get('count', '?')} cores), "
           f"Python {d['machine_info']['python_version']}, {d['datetime']}\n")
     ops = ("eval", "pdf", "sample")
-    print("| model | " + " | ".join(f"{op} {be}" for op in ops for be in ("numpy", "drjit", "mitsuba")) + " |")
-    print("|---|" + "---:|" * 9)
+    bes = ("numpy", "api-drjit", "drjit", "mitsuba")
+    print("| model | " + " | ".join(f"{op} {be}" for op in ops for be in bes) + " |")
+    print("|---|" + "---:|" * (len(ops) * len(bes)))
     cases = sorted({k[1] for k in med if k[0] and k[0].startswith("throughput")})
     for c in cases:
         row = []
         for op in ops:
             ref = med.get((f"throughput-{op}", "roughconductor", "reference"))
-            for be in ("numpy", "drjit", "mitsuba"):
+            for be in bes:
                 t = med.get((f"throughput-{op}", c, be))
                 row.append(f"{t[0] / ref[0]:.2f}" if t and ref else "")
         print(f"| {c} | " + " | ".join(row) + " |")

@@ -12,6 +12,7 @@ albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
 
 from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_albedo, reciprocity,
                        sampling_consistency)
+from .backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
 from .registry import info, make, names, register
@@ -19,4 +20,4 @@ from .registry import info, make, names, register
 __version__ = "0.1.0"
 
 __all__ = ["BxDF", "Sample", "albedo", "albedo_curve", "check", "chi2", "energy", "fit", "hemispherical_albedo",
-           "info", "make", "names", "reciprocity", "register", "sampling_consistency", "__version__"]
+           "info", "make", "names", "reciprocity", "register", "sampling_consistency", "use_backend", "__version__"]

@@ -35,6 +35,7 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from . import backend as _backend
 from . import vec
 from .ops import NP
 from .params import Param
@@ -255,60 +256,73 @@ class BxDF:
     def _out_shape(self, shape):
         return shape + ((self.channels,) if self.channels else ())
 
-    def eval(self, wi, wo) -> np.ndarray:
+    def eval(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """BRDF value ``f(wi, wo)`` (no cosine factor).  Batches of more than
-        :data:`CHUNK` pairs are evaluated ``CHUNK`` pairs at a time."""
+        :data:`CHUNK` pairs are evaluated ``CHUNK`` pairs at a time.  ``backend``:
+        ``"auto"``, ``"numpy"`` or ``"drjit"`` (:mod:`plausible.backend`)."""
         (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
+        be = _backend.choose(n, self, backend, kernel="eval")
         if n <= CHUNK:
-            return self._eval_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape)
+            return self._eval_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape, be)
         out = np.empty((n,) + self._out_shape(())[:1])
         ni, no = _unit_fn(wi_unit), _unit_fn(wo_unit)
-        _chunked(shape, (wi, wo), lambda a, b, sh: self._eval_block(ni(a), no(b), sh), (out,))
+        _chunked(shape, (wi, wo), lambda a, b, sh: self._eval_block(ni(a), no(b), sh, be), (out,))
         return out.reshape(self._out_shape(shape))
 
-    def _eval_block(self, wi, wo, shape):
+    def _eval_block(self, wi, wo, shape, backend="numpy"):
+        if backend == "drjit":
+            return _backend.run(self, "eval", lambda: self._eval_block(wi, wo, shape),
+                                lambda: _backend.eval_block(self, wi, wo, shape))
         with np.errstate(all="ignore"):
             v = self._f(NP, self._color_axis(split(wi)), self._color_axis(split(wo)), self.p)
         return np.array(np.broadcast_to(v, self._out_shape(shape)), dtype=np.float64)
 
-    def pdf(self, wi, wo) -> np.ndarray:
+    def pdf(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """Solid-angle density of :meth:`sample` producing ``wo`` from ``wi``
-        (chunked like :meth:`eval`)."""
+        (chunked like :meth:`eval`; ``backend`` as there)."""
         (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
+        be = _backend.choose(n, self, backend, kernel="pdf")
         if n <= CHUNK:
-            return self._pdf_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape)
+            return self._pdf_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape, be)
         out = np.empty(n)
         ni, no = _unit_fn(wi_unit), _unit_fn(wo_unit)
-        _chunked(shape, (wi, wo), lambda a, b, sh: self._pdf_block(ni(a), no(b), sh), (out,))
+        _chunked(shape, (wi, wo), lambda a, b, sh: self._pdf_block(ni(a), no(b), sh, be), (out,))
         return out.reshape(shape)
 
-    def _pdf_block(self, wi, wo, shape):
+    def _pdf_block(self, wi, wo, shape, backend="numpy"):
+        if backend == "drjit":
+            return _backend.run(self, "pdf", lambda: self._pdf_block(wi, wo, shape),
+                                lambda: _backend.pdf_block(self, wi, wo, shape))
         with np.errstate(all="ignore"):
             v = self._pdf(NP, split(wi), split(wo), self.q)
         return np.array(np.broadcast_to(v, shape), dtype=np.float64)
 
-    def sample(self, wi, u) -> Sample:
+    def sample(self, wi, u, *, backend: str | None = None) -> Sample:
         """Importance-sample ``wo`` given ``wi`` from uniform numbers ``u`` (..., 3)
-        (chunked like :meth:`eval`)."""
+        (chunked like :meth:`eval`; ``backend`` as there)."""
         wi, wi_unit = _prepare("wi", wi)
         u = _as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         n = int(np.prod(shape))
+        be = _backend.choose(n, self, backend, kernel="sample")
         ni = _unit_fn(wi_unit)
         if n <= CHUNK:
-            return self._sample_block(ni(wi), u, shape)
+            return self._sample_block(ni(wi), u, shape, be)
         wo = np.empty((n, 3))
         weight = np.empty((n,) + self._out_shape(())[:1])
         pdf = np.empty(n)
-        _chunked(shape, (wi, u), lambda a, b, sh: tuple(self._sample_block(ni(a), b, sh)),
+        _chunked(shape, (wi, u), lambda a, b, sh: tuple(self._sample_block(ni(a), b, sh, be)),
                  (wo, weight, pdf))
         return Sample(wo.reshape(shape + (3,)), weight.reshape(self._out_shape(shape)), pdf.reshape(shape))
 
-    def _sample_block(self, wi, u, shape) -> Sample:
+    def _sample_block(self, wi, u, shape, backend="numpy") -> Sample:
+        if backend == "drjit":
+            return _backend.run(self, "sample", lambda: self._sample_block(wi, u, shape),
+                                lambda: Sample(*_backend.sample_block(self, wi, u, shape, HORIZON)))
         wi = np.broadcast_to(wi, shape + (3,))
         u = np.broadcast_to(u, shape + (3,))
         with np.errstate(all="ignore"):

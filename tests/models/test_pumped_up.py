@@ -210,8 +210,9 @@ def test_colour_base_keeps_its_hue_and_every_channel_conserves_energy():
     ratio = fm / fb
     assert np.allclose(ratio, ratio[:, :1], rtol=1e-12)
     for t in (0.0, 60.0, 85.0):
-        a = albedo(m, direction(math.radians(t))).value
-        assert np.all(a <= 1.0 + 1e-4) and a[1] == pytest.approx(alb(pumped(PHONG), t), rel=1e-9)
+        a = albedo(m, direction(math.radians(t)))
+        b = albedo(pumped(PHONG), direction(math.radians(t)))
+        assert np.all(a.value <= 1.0 + 1e-4) and abs(a.value[1] - b.value) <= a.error[1] + b.error
 
 
 def test_fresnel_factor_multiplies_the_pumped_lobe():
@@ -354,5 +355,5 @@ def test_anisotropic_base_uses_a_two_dimensional_table_and_conserves_energy():
     for t in (0.0, 45.0, 75.0, 88.0):
         for ph in (0.0, 0.7, math.pi / 2):
             d = direction(math.radians(t), ph)
-            a0, a1 = albedo(b, d).value, albedo(m, d).value
+            a0, a1 = albedo(b, d, tol=1e-10).value, albedo(m, d, tol=1e-10).value
             assert a0 - 1e-9 <= a1 <= 1.0 + 1e-4, (t, ph, a0, a1)

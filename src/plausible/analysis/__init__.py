@@ -7,13 +7,13 @@ callables to that contract.
 """
 
 from .adapters import CallableBxDF, as_bxdf
-from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, direction, hemispherical_albedo, is_isotropic,
-                     pdf_integral)
+from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, albedos, direction, hemispherical_albedo,
+                     is_isotropic, pdf_integral, pdf_integrals)
 from .checks import PropertyResult, energy, reciprocity, sampling_consistency
 from .chi2 import AdaptiveBinning, Chi2Result, FixedBinning, chi2, sidak
 from .report import CheckReport, check
 
 __all__ = ["AdaptiveBinning", "AlbedoResult", "CallableBxDF", "CheckReport", "Chi2Result", "FixedBinning",
-           "PropertyResult", "albedo", "albedo_curve", "albedo_table", "as_bxdf", "check", "chi2", "direction",
-           "energy", "hemispherical_albedo", "is_isotropic", "pdf_integral", "reciprocity", "sampling_consistency",
-           "sidak"]
+           "PropertyResult", "albedo", "albedo_curve", "albedo_table", "albedos", "as_bxdf", "check", "chi2",
+           "direction", "energy", "hemispherical_albedo", "is_isotropic", "pdf_integral", "pdf_integrals",
+           "reciprocity", "sampling_consistency", "sidak"]

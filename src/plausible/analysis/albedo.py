@@ -17,8 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import backend as _backend
+from ..bxdf import BxDF
 from ..progress import start
-from .quadrature import hemisphere_grid
+from .quadrature import lobe_breaks, panel_rule
 
 
 @dataclass(frozen=True)
@@ -39,87 +41,244 @@ def direction(theta: float, phi: float = 0.0) -> np.ndarray:
     return np.array([s * math.cos(phi), s * math.sin(phi), math.cos(theta)])
 
 
-def _integrate_once(model, wi, fn_values, m, levels, refine):
-    grid = hemisphere_grid(wi, model.peak_directions(wi), m=m, levels=levels, refine=refine)
-    vals = fn_values(grid.wo)
-    w = grid.weight
+#: Gauss-Legendre orders of the panel rule, tried in turn (each against the one before).
+ORDERS = (4, 6, 8, 12, 16)
+#: The uniform floor of panels is refined at most this many times (the estimate
+#: then uses twice as many); the finest rule has about 7 million nodes, the
+#: budget of an integrand that never meets ``tol`` (a measured table, a lobe cut
+#: off along a curve).
+MAX_REFINE = 4
+#: Default accuracy asked of :func:`albedo` (absolute, on the error bound).
+TOL = 1e-6
+
+
+class _Rules:
+    """The panel rules of one incidence: breakpoints per floor refinement (cached)
+    and the tensor rule's 1-D nodes and weights per ``(m, refine)``."""
+
+    def __init__(self, model, wi, levels):
+        self.model, self.wi, self.levels = model, wi, levels
+        self._breaks = {}
+        self.sums = {}
+
+    def nodes(self, m, refine):
+        if refine not in self._breaks:
+            self._breaks[refine] = lobe_breaks(self.wi, self.model.peak_directions(self.wi), self.levels, refine)[:2]
+        tb, pb = self._breaks[refine]
+        t, wt = panel_rule(tb, m)
+        p, wp = panel_rule(pb, m)
+        return t, wt * np.sin(t), p, wp
+
+
+def _pad(rows):
+    """1-D arrays of unequal length as one 2-D array (padding repeats the first
+    node, with weight zero in the weight arrays padded alike)."""
+    n = max(len(r) for r in rows)
+    out = np.empty((len(rows), n))
+    for k, r in enumerate(rows):
+        out[k, :len(r)] = r
+        out[k, len(r):] = r[0]
+    return out
+
+
+def _sums(model, kind, rules, requests):
+    """Compute the tensor-rule sums ``requests = [(angle index, m, refine), ...]``
+    and store them in ``rules[a].sums[(m, refine)]``: on Dr.Jit in one launch when
+    the backend rule says so (:mod:`plausible.backend`), else with ``model.eval``
+    (or ``pdf``) per grid (any object with the contract)."""
+    if not requests:
+        return
+    grids = [rules[a].nodes(m, r) for a, m, r in requests]
+    total = sum(len(g[0]) * len(g[2]) for g in grids)
+    if isinstance(model, BxDF) and _backend.choose(total, model, min_rows=_backend.AUTO_MIN_NODES,
+                                                   kernel="quad-" + kind) == "drjit":
+        def numpy():
+            return [_grid_sum(model, kind, rules[a].wi, g) for (a, _, _), g in zip(requests, grids)]
+
+        res = _backend.run(model, "quadrature", numpy, lambda: _jit_sums(model, kind, rules, requests, grids))
+    else:
+        res = [_grid_sum(model, kind, rules[a].wi, g) for (a, _, _), g in zip(requests, grids)]
+    for (a, m, r), v in zip(requests, res):
+        rules[a].sums[(m, r)] = v if np.ndim(v) else float(v)
+
+
+def _jit_sums(model, kind, rules, requests, grids):
+    """:func:`plausible.backend.grid_sums`, one launch per rule ``(m, refine)`` (so
+    that the padding to a common grid size stays small)."""
+    res = [None] * len(requests)
+    for key in sorted({(m, r) for _, m, r in requests}):
+        idx = [k for k, (_, m, r) in enumerate(requests) if (m, r) == key]
+        wis = np.array([rules[requests[k][0]].wi for k in idx])
+        cols = [_pad([grids[k][c] for k in idx]) for c in range(4)]
+        for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
+            for row, k in enumerate(idx):
+                cols[w][row, len(grids[k][c]):] = 0.0
+        for k, v in zip(idx, _backend.grid_sums(model, kind, wis, *cols)):
+            res[k] = v
+    return res
+
+
+def _grid_sum(model, kind, wi, grid):
+    """One tensor-rule sum through the contract (``eval`` or ``pdf`` on the grid)."""
+    t, wt, p, wp = grid
+    st, ct = np.sin(t), np.cos(t)
+    wo = np.stack(np.broadcast_arrays(st[:, None] * np.cos(p)[None, :],
+                                      st[:, None] * np.sin(p)[None, :], ct[:, None]), axis=-1)
+    if kind == "f":
+        vals = model.eval(wi, wo)
+        c = wo[..., 2]
+        vals = vals * (c[..., None] if vals.ndim == c.ndim + 1 else c)
+    else:
+        vals = model.pdf(wi, wo)
+    w = wt[:, None] * wp[None, :]
     if vals.ndim == w.ndim + 1:
         w = w[..., None]
     return np.sum(vals * w, axis=(0, 1))
 
 
-def _integrate(model, wi, fn_values, m, m_low, levels, tol):
-    """Integrate with the ``m``-point rule; the error estimate is the larger of
-    the differences to the ``m_low``-point rule (smooth integrands) and to the
-    same rule on a 2x finer floor of uniform panels (a kink or a jump inside a
-    panel, e.g. the truncation of a ``cos^0`` lobe, where both orders err
-    alike).  While the estimate exceeds ``tol``, refine the floor 4x (at most
-    once) and return the finest estimate."""
-    refine = 1
-    while True:
-        hi = _integrate_once(model, wi, fn_values, m, levels, refine)
-        lo = _integrate_once(model, wi, fn_values, m_low, levels, refine)
-        fine = _integrate_once(model, wi, fn_values, m, levels, 2 * refine)
-        err = np.maximum(np.abs(hi - lo), np.abs(fine - hi)) + 1e-13 * np.abs(hi)
-        if np.all(err <= tol) or refine >= 4:
-            return fine, err
-        refine *= 4
+def pdf_phi_sums(model, wi, theta, theta_w, phi) -> np.ndarray:
+    """``sum_i theta_w[i] pdf(wi, wo(theta[i], phi[j]))`` for every ``j``: a tensor
+    rule's pdf integrated over ``theta`` at each azimuth node (the chi-square
+    test's cells, :mod:`plausible.analysis.chi2`).  One Dr.Jit launch when the
+    backend rule says so, else ``model.pdf`` on the grid."""
+    theta, theta_w, phi = (np.asarray(x, dtype=np.float64) for x in (theta, theta_w, phi))
+    wi = np.asarray(wi, dtype=np.float64)
+    n = len(theta) * len(phi)
+    if isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES,
+                                                   kernel="phi-pdf") == "drjit":
+        def jit():
+            return _backend.grid_sums(model, "pdf", wi[None, :], theta[None, :], theta_w[None, :],
+                                      phi[None, :], np.ones((1, len(phi))), per_phi=True)[0]
+
+        return _backend.run(model, "quadrature", lambda: _numpy_phi_sums(model, wi, theta, theta_w, phi), jit)
+    return _numpy_phi_sums(model, wi, theta, theta_w, phi)
 
 
-def albedo(model, wi, *, m: int = 12, m_low: int = 8, levels: int = 13,
-           tol: float = 2e-5) -> AlbedoResult:
-    """Directional albedo ``a(wi) = int f(wi, wo) cos(theta_o) d omega_o``.
+def _numpy_phi_sums(model, wi, theta, theta_w, phi):
+    st = np.sin(theta)
+    wo = np.stack(np.broadcast_arrays(st[:, None] * np.cos(phi)[None, :],
+                                      st[:, None] * np.sin(phi)[None, :], np.cos(theta)[:, None]), axis=-1)
+    return (model.pdf(wi, wo) * theta_w[:, None]).sum(axis=0)
 
-    ``wi`` is a direction of shape (3,) (normalised here).  Returns
-    :class:`AlbedoResult` with the ``m``-point estimate and the difference to
-    the ``m_low``-point rule as its error bound.  Zero for ``wi`` below the horizon.
-    """
+
+def _integrate(model, kind, wis, tol, levels):
+    """Integrals of ``f cos`` (``kind="f"``) or the pdf over the upper hemisphere for
+    the unit incidences ``wis`` (rows), each refined until its error bound meets
+    ``tol`` (or the finest rule is reached).  Returns ``(values, errors)``.
+
+    Per incidence, with ``I(m, refine)`` the ``m``-point rule on the graded panels
+    of the ``refine``-times finer uniform floor (:func:`~.quadrature.lobe_breaks`)
+    and ``m'`` the order before ``m`` in :data:`ORDERS`: the estimate is
+    ``I(m, 2 refine)`` and its bound the sum of ``|I(m) - I(m')|`` (the
+    lower-order rule's error, which bounds the higher one's for smooth
+    integrands) and ``|I(m, 2 refine) - I(m, refine)|`` (a kink or a jump inside
+    a panel, where both orders err alike and only smaller panels help), plus
+    ``1e-13`` relative: both differences are errors of rules coarser than the
+    estimate, and their sum (not the larger) stays honest where a jump makes
+    the convergence uneven (a ``cos^0`` lobe cut off at its lune: tested
+    against the closed form).  While the bound exceeds ``tol``, the larger of the two causes is
+    refined: the next order, or a 2x finer floor.  All incidences still
+    refining are computed together (on Dr.Jit, one launch per rule)."""
+    rules = [_Rules(model, wi, levels) for wi in wis]
+    state = {a: (1, 1) for a in range(len(wis))}   # index into ORDERS, floor refinement
+    values, errors = [None] * len(wis), [None] * len(wis)
+    while state:
+        need = []
+        for a, (k, r) in state.items():
+            for key in ((ORDERS[k - 1], r), (ORDERS[k], r), (ORDERS[k], 2 * r)):
+                if key not in rules[a].sums:
+                    need.append((a,) + key)
+        _sums(model, kind, rules, sorted(set(need)))
+        for a, (k, r) in list(state.items()):
+            s = rules[a].sums
+            lo, hi, fine = s[(ORDERS[k - 1], r)], s[(ORDERS[k], r)], s[(ORDERS[k], 2 * r)]
+            e_order, e_floor = np.abs(hi - lo), np.abs(fine - hi)
+            err = e_order + e_floor + 1e-13 * np.abs(fine)
+            values[a], errors[a] = fine, err
+            last_k, last_r = k == len(ORDERS) - 1, r >= MAX_REFINE
+            if np.all(err <= tol) or (last_k and last_r):
+                del state[a]
+            elif last_r or (not last_k and np.max(e_order) >= np.max(e_floor)):
+                state[a] = (k + 1, r)
+            else:
+                state[a] = (k, 2 * r)
+    return values, errors
+
+
+def _unit_incidence(wi):
     wi = np.asarray(wi, dtype=np.float64)
     if wi.shape != (3,):
         raise ValueError(f"wi must be one direction of shape (3,), got {wi.shape}")
     nrm = np.linalg.norm(wi)
     if not np.isfinite(nrm) or nrm == 0:
-        raise ValueError("wi must be a finite, non-zero vector")
-    wi = wi / nrm
-    if wi[2] <= 0:
-        z = np.zeros(model.channels) if model.channels else 0.0
-        return AlbedoResult(z, z)
-
-    def fcos(wo):
-        f = model.eval(wi, wo)
-        c = wo[..., 2]
-        return f * (c[..., None] if f.ndim == c.ndim + 1 else c)
-
-    hi, err = _integrate(model, wi, fcos, m, m_low, levels, tol)
-    if np.ndim(hi) == 0:
-        return AlbedoResult(float(hi), float(err))
-    return AlbedoResult(hi, err)
+        raise ValueError(f"wi must be a finite, non-zero vector, got {wi.tolist()}")
+    return wi / nrm
 
 
-def pdf_integral(model, wi, *, m: int = 12, m_low: int = 8, levels: int = 13,
-                 tol: float = 2e-5) -> AlbedoResult:
-    """``int pdf(wi, wo) d omega_o`` over the upper hemisphere (pdf is zero below)."""
-    wi = np.asarray(wi, dtype=np.float64)
-    wi = wi / np.linalg.norm(wi)
-    hi, err = _integrate(model, wi, lambda wo: model.pdf(wi, wo), m, m_low, levels, tol)
-    return AlbedoResult(float(hi), float(err))
+def _check_tol(tol):
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be a positive number (absolute error bound), got {tol!r}")
+    return float(tol)
+
+
+def _results(model, kind, wis, tol, levels):
+    """:func:`_integrate` for any incidences (zero below the horizon), as results."""
+    zero = np.zeros(model.channels) if (kind == "f" and model.channels) else 0.0
+    up = [k for k, w in enumerate(wis) if w[2] > 0]
+    vals, errs = _integrate(model, kind, [wis[k] for k in up], tol, levels) if up else ([], [])
+    out = [AlbedoResult(zero, zero)] * len(wis)
+    for k, v, e in zip(up, vals, errs):
+        out[k] = AlbedoResult(float(v), float(e)) if np.ndim(v) == 0 else AlbedoResult(v, e)
+    return out
+
+
+def albedo(model, wi, *, tol: float = TOL, levels: int = 13) -> AlbedoResult:
+    """Directional albedo ``a(wi) = int f(wi, wo) cos(theta_o) d omega_o``.
+
+    ``wi`` is a direction of shape (3,) (normalised here).  The quadrature is
+    refined until its error bound is at most ``tol`` (absolute; default 1e-6) and
+    stops there (see :func:`_integrate`).  Returns :class:`AlbedoResult`: the value
+    and the bound reached (which exceeds ``tol`` only where the finest rule, order
+    16 on an 8x finer floor, does not meet it).  Zero for ``wi`` below the horizon.
+    """
+    return _results(model, "f", [_unit_incidence(wi)], _check_tol(tol), levels)[0]
+
+
+def albedos(model, wis, *, tol: float = TOL, levels: int = 13) -> list:
+    """:func:`albedo` at many incidences ``wis`` (rows of shape (3,)), refined
+    together (on Dr.Jit, each refinement step is one launch for all of them)."""
+    tol = _check_tol(tol)
+    return _results(model, "f", [_unit_incidence(w) for w in wis], tol, levels)
+
+
+def pdf_integral(model, wi, *, tol: float = TOL, levels: int = 13) -> AlbedoResult:
+    """``int pdf(wi, wo) d omega_o`` over the upper hemisphere (pdf is zero below),
+    refined to ``tol`` like :func:`albedo`."""
+    r = _results(model, "pdf", [_unit_incidence(wi)], _check_tol(tol), levels)[0]
+    return AlbedoResult(float(r.value), float(r.error))
+
+
+def pdf_integrals(model, wis, *, tol: float = TOL, levels: int = 13) -> list:
+    """:func:`pdf_integral` at many incidences, refined together (like :func:`albedos`)."""
+    tol = _check_tol(tol)
+    res = _results(model, "pdf", [_unit_incidence(w) for w in wis], tol, levels)
+    return [AlbedoResult(float(r.value), float(r.error)) for r in res]
 
 
 def albedo_curve(model, thetas, phi: float = 0.0, progress=None, **kw) -> AlbedoResult:
     """Directional albedo at polar angles ``thetas`` (radians) and azimuth ``phi``.
 
     Returns an :class:`AlbedoResult` whose ``value``/``error`` have shape
-    ``(len(thetas),)`` (plus a channel axis for colour models).  ``progress``: a
-    :mod:`plausible.progress` factory, ticked after each angle.
+    ``(len(thetas),)`` (plus a channel axis for colour models).  All angles are
+    integrated together (:func:`albedos`; ``tol`` and ``levels`` pass on).
+    ``progress``: a :mod:`plausible.progress` factory, ticked once per angle.
     """
     thetas = np.atleast_1d(np.asarray(thetas, dtype=np.float64))
     if np.any(~np.isfinite(thetas)) or np.any(thetas < 0) or np.any(thetas > math.pi / 2):
         raise ValueError("thetas must lie in [0, pi/2] radians")
     tick = start(progress, len(thetas), f"albedo {model.name}")
-    res = []
-    for t in thetas:
-        res.append(albedo(model, direction(t, phi), **kw))
-        tick()
+    res = albedos(model, [direction(t, phi) for t in thetas], **kw)
+    tick(len(res))
     return AlbedoResult(np.array([r.value for r in res]), np.array([r.error for r in res]))
 
 
@@ -160,13 +319,10 @@ def hemispherical_albedo(model, *, n_theta: int = 16, n_phi: int | None = None) 
     if n_phi is None:
         n_phi = 1 if is_isotropic(model) else 8
     phis = (np.arange(n_phi) + 0.5) * (2 * math.pi / n_phi)
-    tot = 0.0
-    err = 0.0
-    for ph in phis:
-        for m_, wm in zip(mu, wmu):
-            r = albedo(model, direction(math.acos(m_), ph))
-            tot = tot + wm * np.asarray(r.value) / n_phi
-            err = err + wm * np.asarray(r.error) / n_phi
+    grid = [(ph, m_, wm) for ph in phis for m_, wm in zip(mu, wmu)]
+    res = albedos(model, [direction(math.acos(m_), ph) for ph, m_, _ in grid])
+    tot = sum(wm * np.asarray(r.value) / n_phi for (_, _, wm), r in zip(grid, res))
+    err = sum(wm * np.asarray(r.error) / n_phi for (_, _, wm), r in zip(grid, res))
     if np.ndim(tot) == 0:
         return AlbedoResult(float(tot), float(err))
     return AlbedoResult(tot, err)
@@ -182,10 +338,12 @@ def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_thet
     the largest channel.  The polar grid starts with ``n_theta`` nodes (2 degrees)
     and is halved while the interpolation error, estimated at the new nodes from
     the coarser table and divided by 8 (the ``O(h^3)`` rate), exceeds ``tol``, up to
-    ``max_theta`` nodes.  The node on the horizon is evaluated 1e-6 rad above it
-    (at exactly 90 degrees the albedo is zero by convention, not by continuity).
-    ``progress``: a :mod:`plausible.progress` factory, announced once per
-    refinement level (the number of albedos it evaluates) and ticked per albedo.
+    ``max_theta`` nodes; each node's albedo is integrated to ``tol / 10`` (all the
+    nodes of a step together, :func:`albedos`).  The node on the horizon is
+    evaluated 1e-6 rad above it (at exactly 90 degrees the albedo is zero by
+    convention, not by continuity).  ``progress``: a :mod:`plausible.progress`
+    factory, announced once per refinement level (the number of albedos it
+    evaluates) and ticked when they are done.
     """
     from ..tables import HALF_PI, AngleTable
 
@@ -193,25 +351,26 @@ def albedo_table(model, *, n_phi: int | None = None, n_theta: int = 46, max_thet
         n_phi = 0 if is_isotropic(model) else 32
     phis = np.arange(n_phi) * (2 * math.pi / n_phi) if n_phi else np.zeros(1)
 
-    def level(thetas):
-        tick = start(progress, len(thetas) * len(phis), f"albedo table {model.name}")
-        return np.array([column(t, tick) for t in thetas])
-
-    def column(theta, tick):
-        t = min(theta, HALF_PI - 1e-6)
-        row = [np.max(np.atleast_1d(albedo(model, direction(t, ph)).value)) for ph in phis]
-        tick(len(phis))
-        return np.array(row) if n_phi else row[0]
+    def columns(ths):
+        """Albedos at polar angles ``ths`` (all azimuths), integrated together to
+        ``tol / 10`` (a share of the error budget: node errors add at most 10 % to
+        the interpolation error)."""
+        tick = start(progress, len(ths) * len(phis), f"albedo table {model.name}")
+        dirs = [direction(min(t, HALF_PI - 1e-6), ph) for t in ths for ph in phis]
+        res = albedos(model, dirs, tol=tol / 10)
+        vals = np.array([np.max(np.atleast_1d(r.value)) for r in res]).reshape(len(ths), len(phis))
+        tick(len(dirs))
+        return vals if n_phi else vals[:, 0]
 
     thetas = np.linspace(0.0, HALF_PI, n_theta)
-    vals = level(thetas)
+    vals = columns(thetas)
     while True:
         coarse = AngleTable(vals)
         n = 2 * len(vals) - 1
         if n > max_theta:
             return coarse
         mids = 0.5 * (thetas[:-1] + thetas[1:])
-        new = level(mids)
+        new = columns(mids)
         guess = coarse.lookup_angles(mids, phis if n_phi else None)
         fine = np.empty((n,) + vals.shape[1:])
         fine[0::2] = vals

@@ -12,9 +12,9 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..progress import start, within
+from ..progress import start
 from ..text import jsonable
-from .albedo import albedo, direction, is_isotropic, pdf_integral
+from .albedo import albedos, direction, is_isotropic, pdf_integrals
 
 #: Incidence angles (degrees) of the default energy grid: dense toward grazing.
 ENERGY_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9)
@@ -94,8 +94,8 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     tick = start(progress, len(dirs), f"energy {model.name}")
     best = (-math.inf, None, None)
     curve = []
-    for t, p in dirs:
-        r = albedo(model, direction(math.radians(t), math.radians(p)))
+    res = albedos(model, [direction(math.radians(t), math.radians(p)) for t, p in dirs])
+    for (t, p), r in zip(dirs, res):
         v = float(np.max(r.value))
         e = float(np.max(r.error))
         curve.append((t, p, v, e))
@@ -139,11 +139,14 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
     figs = dict.fromkeys(SAMPLING_FIGURES, 0.0)
     worst = {}
     problems = []
+    # the deterministic integrals (pdf, albedo) of every incidence, refined together
+    wis = [direction(math.radians(t), math.radians(p)) for p in phis_deg for t in thetas_deg]
+    integrals = iter(zip(pdf_integrals(model, wis), albedos(model, wis)))
     for p in phis_deg:
         for t in thetas_deg:
             here = dict(theta_i_deg=t, phi_i_deg=p)
             wi = direction(math.radians(t), math.radians(p))
-            at, msgs = _sampling_at(model, wi, rng.random((n_samples, 3)), tol, sigmas)
+            at, msgs = _sampling_at(model, wi, rng.random((n_samples, 3)), tol, sigmas, *next(integrals))
             for key, val in at.items():
                 if val > figs[key]:
                     figs[key] = float(val)
@@ -156,9 +159,10 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
                           dict(worst, problems=problems[:5]), figs)
 
 
-def _sampling_at(model, wi, u, tol, sigmas):
+def _sampling_at(model, wi, u, tol, sigmas, pint, ref):
     """The figures of :func:`sampling_consistency` at one incidence ``wi`` from the
-    random numbers ``u``, and a message for each that fails."""
+    random numbers ``u`` (``pint``, ``ref``: the pdf integral and the albedo at
+    ``wi``, by quadrature), and a message for each that fails."""
     n = len(u)
     s = model.sample(wi, u)
     valid = s.pdf > 0
@@ -175,14 +179,12 @@ def _sampling_at(model, wi, u, tol, sigmas):
     finite = np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.pdf))
     # invalid fraction against the pdf's missing mass
     inv = 1.0 - valid.mean()
-    pint = pdf_integral(model, wi)
     sig_inv = math.sqrt(max(inv * (1 - inv), 1.0 / n) / n)
     inv_mis = abs((1.0 - pint.value) - inv) / (sig_inv + pint.error)
     # Monte Carlo albedo (mean weight, channel mean) against quadrature
     w = s.weight if s.weight.ndim == 1 else s.weight.mean(axis=-1)
     mc = w.mean()
     se = w.std(ddof=1) / math.sqrt(n)
-    ref = albedo(model, wi)
     refv = float(np.mean(ref.value))
     # floor 1e-3 tol: 1e-9 for float64 models; 1e-7 for float32 renderers (adapters' tol 1e-4),
     # whose constant weights (a diffuse lobe) differ from the quadrature by float32 rounding

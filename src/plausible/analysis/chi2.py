@@ -36,6 +36,7 @@ import numpy as np
 import scipy.stats
 
 from ..text import jsonable
+from .albedo import pdf_phi_sums
 from .quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
 
 __all__ = ["AdaptiveBinning", "BINNINGS", "Cells", "Chi2Result", "FixedBinning", "chi2", "sidak"]
@@ -200,8 +201,7 @@ def _band_expected(model, wi, tbr, pbr, p_edges, m):
     """Integral of the pdf over each cell ``[tbr[0], tbr[-1]] x [p_edges[j], p_edges[j+1]]``."""
     tn, tw = panel_rule(tbr, m)
     pn, pw = panel_rule(pbr, m)
-    vals = _pdf_grid(model, wi, tn, pn) * (tw * np.sin(tn))[:, None] * pw[None, :]
-    per_phi = vals.sum(axis=0)
+    per_phi = pdf_phi_sums(model, wi, tn, tw * np.sin(tn), pn) * pw
     idx = np.clip(np.searchsorted(p_edges, pn, side="right") - 1, 0, len(p_edges) - 2)
     return np.bincount(idx, weights=per_phi, minlength=len(p_edges) - 1)
 

@@ -1,0 +1,179 @@
+"""The backend switch (:mod:`plausible.backend`): the rule that picks NumPy or
+Dr.Jit, the same numbers on both over the registry, and a NumPy-only install."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import plausible
+from conftest import model_cases, random_upper
+from plausible import backend
+from plausible.bxdf import BxDF
+
+CASES = model_cases(max_variants=0)
+
+needs_drjit = pytest.mark.skipif(not backend.drjit_available(), reason="Dr.Jit LLVM backend unavailable")
+
+
+def assert_rel(got, ref, rtol, floor=1e-290):
+    """``|got - ref| <= rtol max(|got|, |ref|, floor)`` element-wise.  The floor:
+    Dr.Jit's ``exp`` flushes results in the subnormal range (below about 1e-300)
+    to zero where NumPy returns a subnormal number (e.g. ``cos^10000`` far from a
+    lobe), so values that small agree absolutely, not relatively."""
+    got, ref = np.asarray(got), np.asarray(ref)
+    assert got.shape == ref.shape
+    scale = np.maximum(np.maximum(np.abs(got), np.abs(ref)), floor)
+    rel = np.abs(got - ref) / scale
+    assert np.all(rel <= rtol), f"max relative difference {rel.max():.3g} > {rtol:g}"
+
+
+@needs_drjit
+@pytest.mark.parametrize("name,kw", CASES)
+def test_numpy_and_drjit_front_ends_agree(name, kw, rng):
+    m = plausible.make(name, **kw)
+    wi, wo, u = random_upper(rng, 3000), random_upper(rng, 3000), rng.random((3000, 3))
+    # eval and pdf: the same formulas, transcendental functions within 1e-12 relative
+    assert_rel(m.eval(wi, wo, backend="drjit"), m.eval(wi, wo, backend="numpy"), 1e-12)
+    assert_rel(m.pdf(wi, wo, backend="drjit"), m.pdf(wi, wo, backend="numpy"), 1e-12)
+    assert_rel(m.eval(wi[0], wo, backend="drjit"), m.eval(wi[0], wo, backend="numpy"), 1e-12)
+    a, b = m.sample(wi, u, backend="numpy"), m.sample(wi, u, backend="drjit")
+    np.testing.assert_allclose(b.wo, a.wo, rtol=0, atol=1e-12)
+    # pdf and weight at the sampled direction: a direction that differs in its last
+    # bits (sampling inverts pow/exp/atan) changes a cos^n lobe by n times as much
+    # relatively (n = 10^4 here), hence 1e-10 rather than 1e-12
+    assert_rel(b.pdf, a.pdf, 1e-10)
+    assert_rel(b.weight, a.weight, 1e-10)
+
+
+def test_request_rule_keyword_then_context_then_environment(monkeypatch):
+    monkeypatch.setenv(backend.ENV, "numpy")
+    assert backend.requested() == "numpy"
+    with backend.use("auto"):
+        assert backend.requested() == "auto"
+        assert backend.requested("numpy") == "numpy"
+        with plausible.use_backend("numpy"):
+            assert backend.requested() == "numpy"
+        assert backend.requested() == "auto"
+    monkeypatch.delenv(backend.ENV)
+    assert backend.requested() == "auto"
+
+
+def test_bad_backend_names_are_refused_with_the_choices(monkeypatch):
+    m = plausible.make("lambertian")
+    with pytest.raises(ValueError, match=r"backend must be one of auto, numpy, drjit; got 'cuda'"):
+        m.eval([0, 0, 1], [0, 0, 1], backend="cuda")
+    monkeypatch.setenv(backend.ENV, "jax")
+    with pytest.raises(ValueError, match=r"PLAUSIBLE_BACKEND must be one of .*got 'jax'"):
+        m.eval([0, 0, 1], [0, 0, 1])
+
+
+@needs_drjit
+def test_auto_picks_drjit_for_large_batches_only():
+    assert backend.choose(10) == "numpy"
+    assert backend.choose(backend.AUTO_MIN_ROWS) == "drjit"
+    # a model not yet compiled needs a batch worth the compilation, then less
+    m = plausible.make("ashikhmin-shirley", nu=12.345, nv=67.89)
+    assert backend.choose(backend.AUTO_MIN_ROWS, m) == "numpy"
+    assert backend.choose(backend.AUTO_MIN_NEW, m) == "drjit"
+    assert backend.choose(backend.AUTO_MIN_ROWS, m) == "drjit"
+    assert backend.choose(backend.AUTO_MIN_ROWS, plausible.make("ashikhmin-shirley", nu=12.345, nv=67.9)) == "numpy"
+    with backend.use("numpy"):
+        assert backend.choose(10 ** 7) == "numpy"
+    with backend.use("drjit"):
+        assert backend.choose(1) == "drjit"
+        assert backend.choose(0) == "numpy"      # nothing to trace
+        m = plausible.make("lambertian")
+        assert m.eval(np.zeros((0, 3)), [0, 0, 1]).shape == (0,)
+        assert backend.choose(1, m) == "drjit"  # not marked NumPy-only by the empty call
+
+
+class _NumpyHooks(BxDF):
+    """A model whose hook calls NumPy directly (not written against ``ops``)."""
+
+    def _f(self, ops, wi, wo, p):
+        return np.where(np.asarray(wi[2]) > 0, 1.0 / np.pi, 0.0) * np.ones_like(np.asarray(wo[2]))
+
+    def _pdf(self, ops, wi, wo, q):
+        return ops.where(wo[2] > 0, wo[2] / np.pi, 0.0)
+
+    def _sample(self, ops, wi, u, q):
+        raise NotImplementedError
+
+
+@needs_drjit
+def test_a_model_that_calls_numpy_in_its_hooks_falls_back_to_numpy(rng):
+    m = _NumpyHooks()
+    wi, wo = random_upper(rng, 50), random_upper(rng, 50)
+    np.testing.assert_array_equal(m.eval(wi, wo, backend="drjit"), np.full(50, 1 / np.pi))
+    assert backend.choose(10 ** 6, m) == "numpy"          # remembered for later calls
+    assert backend.choose(10 ** 6, _NumpyHooks()) == "drjit"  # per model, not per class
+
+
+BLOCKER = textwrap.dedent("""
+    import sys, importlib.abc
+    class Block(importlib.abc.MetaPathFinder):
+        def find_spec(self, name, path=None, target=None):
+            if name.split(".")[0] in ("drjit", "mitsuba"):
+                raise ImportError(f"{name} hidden for this test")
+    sys.meta_path.insert(0, Block())
+""")
+
+
+def test_numpy_only_install_works_and_refuses_drjit_clearly(tmp_path):
+    """Dr.Jit and Mitsuba hidden by an import hook: ``auto`` runs on NumPy (a large
+    batch included), the albedo of a Lambertian surface is still its ``kd``, and
+    asking for Dr.Jit names the missing extra."""
+    script = BLOCKER + textwrap.dedent("""
+        import numpy as np, plausible
+        from plausible import backend
+        assert not backend.drjit_available()
+        m = plausible.make("lambertian", rd=0.4)
+        wo = np.tile([0.0, 0.6, 0.8], (backend.AUTO_MIN_ROWS, 1))
+        assert np.allclose(m.eval([0, 0, 1], wo), 0.4 / np.pi)
+        a = plausible.albedo(m, [0.3, 0.0, 0.9])
+        assert abs(a.value - 0.4) <= max(a.error, 1e-12), (a.value, a.error)
+        try:
+            m.eval([0, 0, 1], wo, backend="drjit")
+        except ValueError as e:
+            assert "render" in str(e) and "Dr.Jit" in str(e)
+        else:
+            raise AssertionError("backend='drjit' without Dr.Jit did not raise")
+        assert "drjit" not in sys.modules and "mitsuba" not in sys.modules
+        print("ok")
+    """)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), PLAUSIBLE_CACHE_DIR="")
+    env.pop(backend.ENV, None)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "ok"
+
+
+@needs_drjit
+@pytest.mark.parametrize("spec", ["ashikhmin-shirley:nu=10:nv=100", "modified-phong:kd=0.2,0.3,0.4:n=30"])
+def test_albedo_agrees_on_both_backends_within_its_error_bounds(spec):
+    m = plausible.registry.make_from_spec(spec)
+    wis = [plausible.analysis.direction(np.radians(t), np.radians(p)) for t, p in ((40, 60), (89.5, 0))]
+    with plausible.use_backend("numpy"):
+        a = plausible.analysis.albedos(m, wis)
+    with plausible.use_backend("drjit"):
+        b = plausible.analysis.albedos(m, wis)
+    for x, y in zip(a, b):
+        assert np.all(np.abs(np.asarray(x.value) - y.value) <= np.asarray(x.error) + y.error)
+
+
+@needs_drjit
+def test_check_report_is_the_same_on_both_backends():
+    m = plausible.make("ashikhmin-shirley", nu=10, nv=100)
+    with plausible.use_backend("numpy"):
+        a = plausible.check(m, quick=True)
+    with plausible.use_backend("drjit"):
+        b = plausible.check(m, quick=True)
+    assert [r.passed for r in a.results] == [r.passed for r in b.results] == [True] * 4
+    ea, eb = a["energy"], b["energy"]
+    assert abs(ea.figure - eb.figure) <= ea.worst["error"] + eb.worst["error"]
+    # the chi-square statistic sees the same samples and cell integrals to 1e-6
+    assert b["chi2"].figure == pytest.approx(a["chi2"].figure, rel=1e-3)
