@@ -1,4 +1,4 @@
-"""Real materials: the published fits of the MERL database as ready models.
+"""The material library: the published fits of the MERL database as ready models.
 
 The fitted parameters of the MERL materials (W. Matusik et al., "A data-driven
 reflectance model", SIGGRAPH 2003) published by
