@@ -204,7 +204,7 @@ def fit_data(key: str) -> dict:
 
 # -- lookup ---------------------------------------------------------------------------
 
-def _suggest(word: str, options) -> str:
+def suggest(word: str, options) -> str:
     close = difflib.get_close_matches(word, list(options), n=5, cutoff=0.5)
     return f"; did you mean {', '.join(close)}?" if close else ""
 
@@ -215,7 +215,7 @@ def fit_set(key: str) -> FitSet:
         if fs.key == key:
             return fs
     keys = [f.key for f in FIT_SETS]
-    raise ValueError(f"unknown fit {key!r}{_suggest(key, keys)} (fits: {', '.join(keys)})")
+    raise ValueError(f"unknown fit {key!r}{suggest(key, keys)} (fits: {', '.join(keys)})")
 
 
 def fits() -> list[FitSet]:
@@ -239,7 +239,7 @@ def terms(name: str, fit: str = DEFAULT_FIT) -> tuple:
     data = fit_data(fit_set(fit).key)
     if name not in data:
         names = sorted(set(data) | set(materials()))
-        raise ValueError(f"unknown material {name!r} in fit {fit!r}{_suggest(name, names)} "
+        raise ValueError(f"unknown material {name!r} in fit {fit!r}{suggest(name, names)} "
                          f"({len(data)} materials in this fit; 'plausible materials' lists them)")
     return data[name]
 

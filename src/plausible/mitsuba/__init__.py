@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from .. import registry, vec
+from ..params import ModelInfo
 
 #: Mitsuba-style parameter names accepted by every plugin whose model has one of
 #: the candidate parameters (first candidate present wins).
@@ -168,7 +169,8 @@ def make_plugin_class(plugin: str, model_name: str):
 
     from ..ops import drjit_ops
 
-    info = registry.info(model_name)
+    info = model_name if isinstance(model_name, ModelInfo) else registry.info(model_name)  # or an unregistered entry
+    model_name = info.name
     alias = aliases_for(plugin, info)
     spectral = mi.is_spectral
 
@@ -425,6 +427,8 @@ def register(variant: str | None = None) -> list:
     """
     import mitsuba as mi
 
+    from . import material
+
     if variant is not None:
         mi.set_variant(variant)
     _ensure_variant()
@@ -436,6 +440,7 @@ def register(variant: str | None = None) -> list:
             classes[plugin] = cls
             mi.register_bsdf(plugin, (lambda c: (lambda props: c(props)))(cls))
         out.append(plugin)
+    out += material.register_plugin(classes)  # plausible_material (plausible.mitsuba.material)
     return out
 
 
