@@ -63,11 +63,12 @@ def _heatmap(rows, names, keys, tol):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LinearSegmentedColormap
+    from matplotlib.patches import Rectangle
 
     grid = np.full((len(names), len(keys)), np.nan)
     for r in rows:
         grid[names.index(r.material), keys.index(r.fit)] = r.max_albedo
-    fig, ax = plt.subplots(figsize=(1.0 + 0.9 * len(keys), 1.2 + 0.42 * len(names)))
+    fig, ax = plt.subplots(figsize=(max(4.5, 1.6 + 0.9 * len(keys)), 1.8 + 0.42 * len(names)))
     cmap = LinearSegmentedColormap.from_list("a", ["#f7fbff", "#6baed6", "#08306b"])
     ax.imshow(np.minimum(grid, 1.0), cmap=cmap, vmin=0, vmax=1, aspect="auto")
     for i in range(len(names)):
@@ -75,14 +76,16 @@ def _heatmap(rows, names, keys, tol):
             v = grid[i, j]
             if np.isfinite(v):
                 gain = v > 1 + tol
+                if gain:
+                    ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, facecolor="#fcbba1", edgecolor="#cb181d"))
                 ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7,
-                        color="red" if gain else ("white" if v > 0.55 else "black"),
+                        color="#99000d" if gain else ("white" if v > 0.55 else "black"),
                         fontweight="bold" if gain else "normal")
     ax.set_xticks(range(len(keys)))
     ax.set_xticklabels(keys, rotation=40, ha="right", fontsize=7)
     ax.set_yticks(range(len(names)))
     ax.set_yticklabels(names, fontsize=7)
-    ax.set_title("largest directional albedo (red: > 1, gains energy)", fontsize=9)
+    ax.set_title("largest directional albedo\n(red: above 1, the fit gains energy)", fontsize=9)
     fig.tight_layout()
     return fig
 
