@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..library import fit_set, fits as all_fits, material, materials
 from .albedo import albedo, direction
 from .checks import reciprocity
 
@@ -95,8 +96,6 @@ def albedo_curve_of_sum(model, thetas=THETAS):
 
 def check_fit(name: str, fit: str, thetas=THETAS) -> FitCheck:
     """The :class:`FitCheck` of one material of one fit set."""
-    from ..library import material
-
     return check_model(material(name, fit), name, fit, thetas)
 
 
@@ -117,8 +116,6 @@ def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None) -> list[F
     set (or ``fits``).  ``progress``, if given, is called with no argument after
     each fit.  Fit sets that cannot be loaded are skipped (see
     :attr:`plausible.library.FitSet.reason`)."""
-    from ..library import fit_set, fits as all_fits, materials
-
     keys = [fit_set(k).key for k in fits] if fits else [f.key for f in all_fits() if f.built]
     rows = []
     for key in keys:

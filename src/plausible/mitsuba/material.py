@@ -75,7 +75,7 @@ def make_material_plugin_class():
     the parts' colours converted to ``mi.Color3f`` for Dr.Jit."""
     import mitsuba as mi
 
-    from . import make_plugin_class
+    from . import make_plugin_class  # the package imports this module inside register()
 
     base = make_plugin_class(PLUGIN, INFO)
 
