@@ -136,8 +136,8 @@ def materials_atlas(ctx, fit, material):
         names = names[:12]
     ctx.steps(2)
     cols = 10 if len(names) > 20 else 6
-    cell = max(24, ctx.res(0.35))
-    spp = ctx.spp(0.5)
+    cell = max(24, ctx.res(0.3))    # 96 px per sphere at the default 320
+    spp = ctx.spp(0.25)
     imgs = _spheres(mi, [{"type": "plausible_material", "name": n, "fit": fit} for n in names], cols, cell, spp)
     ctx.tick()
     rows = math.ceil(len(names) / cols)
