@@ -102,8 +102,10 @@ def _spheres(mi, bsdfs, cols, res_cell, spp):
          "sun": {"type": "directional", "direction": [0.45, 0.35, -0.82],
                  "irradiance": {"type": "rgb", "value": 2.5}},
          "softbox": {"type": "rectangle",
-                     "to_world": mi.ScalarTransform4f().look_at(origin=[-6.0, 5.0, 9.0], target=[0, 0, 0],
-                                                                up=[0, 0, 1]) @ mi.ScalarTransform4f().scale(2.5),
+                     # outside the orthographic view (|x| <= cols * spacing / 2): seen only in reflections
+                     "to_world": mi.ScalarTransform4f().look_at(origin=[-8.0 - cols * spacing / 2, 12.0, 9.0],
+                                                                target=[0, 0, 0], up=[0, 0, 1])
+                     @ mi.ScalarTransform4f().scale(4.0),
                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 3.0}}}}
     for i, b in enumerate(bsdfs):
         r, c = divmod(i, cols)
