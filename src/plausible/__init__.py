@@ -15,9 +15,12 @@ from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_
 from .backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
+from .library import material, materials
+from .models.sum import Sum
 from .registry import info, make, names, register
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "albedo", "albedo_curve", "check", "chi2", "energy", "fit", "hemispherical_albedo",
-           "info", "make", "names", "reciprocity", "register", "sampling_consistency", "use_backend", "__version__"]
+__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "check", "chi2", "energy", "fit",
+           "hemispherical_albedo", "info", "make", "material", "materials", "names", "reciprocity", "register",
+           "sampling_consistency", "use_backend", "__version__"]

@@ -539,5 +539,34 @@ def export_cmd(model, params, fmt, out, uniforms):
     click.echo(f"wrote {out} ({fmt}, {m!r})")
 
 
+@main.command()
+@click.option("--fit", "fit", metavar="FIT", help="List only the materials of this fit set.")
+@click.option("--fits", "fits_only", is_flag=True, help="List only the fit sets.")
+def materials(fit, fits_only):
+    """The published fits of the MERL materials (Ngan et al. 2005, Löw et al. 2012):
+    fit sets, then every material with its fits.  Use one as material:NAME@FIT."""
+    from . import library
+
+    t = Table(title="published fit sets (use as material:NAME@FIT)")
+    for col in ("fit", "bbm model", "materials", "what it is"):
+        t.add_column(col)
+    for fs in library.fits():
+        what = fs.description if fs.built else f"[red]not loadable:[/red] {fs.reason}"
+        t.add_row(fs.key, fs.model, str(len(library.fit_data(fs.key))), what)
+    console.print(t)
+    if fits_only:
+        return
+    try:
+        mats = library.materials(fit)
+    except ValueError as e:
+        _fail(str(e))
+    t = Table(title=f"materials ({len(mats)})" + (f" of {fit}" if fit else ""))
+    t.add_column("material", style="bold", no_wrap=True)
+    t.add_column("fits")
+    for name, keys in mats.items():
+        t.add_row(name, ", ".join(keys))
+    console.print(t)
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -147,7 +147,15 @@ def _spec_value(v) -> str:
 
 def make_from_spec(spec: str, **extra):
     """Build a model from ``"name"`` or ``"name:k=v:k=v"`` (colours as ``r,g,b``;
-    a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``)."""
+    a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``;
+    a published fit of a real material, ``"material:NAME@FIT"``, see :mod:`plausible.library`)."""
+    if spec.strip().startswith("material:"):
+        from .library import from_spec  # the library imports the models, which import us
+
+        if extra:
+            raise ValueError(f"model spec {spec!r}: a material takes no parameters "
+                             f"(got {', '.join(sorted(extra))})")
+        return from_spec(spec.strip())
     name, *assign = split_spec(spec)
     params = parse_assignments(assign)
     params.update(extra)

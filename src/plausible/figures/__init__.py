@@ -57,6 +57,7 @@ def figure(name: str, title: str, source: str, caption: str, renders: bool = Fal
 
 def _load():
     from . import paper_as, paper_neumann, paper_notes, checks, lobes  # noqa: F401,I001  (report order)
+    from . import materials  # noqa: F401  (issue 16: the published MERL fits)
 
 
 def names() -> list[str]:

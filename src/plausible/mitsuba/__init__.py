@@ -72,7 +72,7 @@ def register(variant: str | None = None) -> list:
     Plugins are registered for the current Mitsuba variant (``variant`` sets it
     first; with none set, ``llvm_ad_rgb`` is tried, then ``scalar_rgb``).  Call
     again after switching variants.  Returns the plugin names (those of
-    :func:`plugin_names`, then ``merl``).
+    :func:`plugin_names`, then ``merl`` and ``plausible_material``).
     """
     import mitsuba as mi
 
@@ -91,6 +91,9 @@ def register(variant: str | None = None) -> list:
         classes["merl"] = make_merl_class()
         mi.register_bsdf("merl", (lambda c: (lambda props: c(props)))(classes["merl"]))
     out.append("merl")
+    from . import material
+
+    out += material.register_plugin(classes)  # plausible_material (plausible.mitsuba.material)
     return out
 
 

@@ -89,7 +89,8 @@ def array_safe(mi, model, name: str) -> bool:
 
 def traversable(mi, prm, value):
     """``(array, flags)`` under which a non-texture parameter appears in
-    ``mi.traverse``, or None (a nested model spec: a string).
+    ``mi.traverse``, or None (a nested model spec, or a choice without a fixed
+    list such as a material name: a string).
 
     * continuous scalars and grey colours: ``mi.Float`` of width 1, differentiable;
     * integers: ``mi.UInt32``; choices: ``mi.UInt32``, the index in ``prm.choices``;
@@ -98,8 +99,8 @@ def traversable(mi, prm, value):
     the last three non-differentiable.
     """
     nd = mi.ParamFlags.NonDifferentiable
-    if prm.kind == "model":
-        return None
+    if prm.kind == "model" or (prm.kind == "choice" and not prm.choices):
+        return None     # a nested model spec, or an open choice (a material name): strings
     if prm.kind == "choice":
         return mi.UInt32(prm.choices.index(value)), nd
     if prm.kind in ("scalar", "color"):

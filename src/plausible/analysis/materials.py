@@ -1,0 +1,167 @@
+"""Which published fits are physically plausible?  ``check`` of every MERL fit.
+
+For each material of each loadable fit set (:mod:`plausible.library`) this
+measures
+
+* reciprocity: :func:`plausible.analysis.reciprocity` of the whole model (the
+  largest relative asymmetry ``|f(a,b) - f(b,a)| / max|f|`` over pairs of
+  stratified directions);
+* energy: the directional albedo ``a(theta_i)`` on the grid :data:`THETAS`,
+  its largest value over angles and RGB channels, and where it occurs.
+
+The albedo of a :class:`~plausible.models.sum.Sum` is the sum of its parts'
+albedos times their scales (the integral is linear), so each part is integrated
+once with :func:`plausible.analysis.albedo` (grey, scale 1) and the scales are
+applied after: the same integrator, a third of the work of integrating the RGB
+sum.  ``tests/analysis/test_materials.py`` checks that the numbers agree with
+``plausible.albedo(plausible.material(...), wi)``.  All fits are isotropic, so
+one azimuth suffices.
+
+``scripts/materials_table.py`` writes the tables of ``docs/materials.md`` with
+:func:`check_fits` and :func:`markdown`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..library import fit_set, fits as all_fits, material, materials
+from .albedo import albedo, direction
+from .checks import reciprocity
+
+#: Incidence angles (degrees) of the albedo grid: dense toward grazing, where
+#: Ward's and Cook-Torrance's albedos grow.
+THETAS = (0.0, 30.0, 60.0, 75.0, 85.0, 88.0, 89.5, 89.9)
+#: An albedo above ``1 + TOL`` gains energy (the integrator's accuracy is ~2e-5).
+TOL = 1e-4
+#: Reciprocity verdict: relative asymmetry at most this.
+RECIPROCITY_TOL = 1e-9
+CHANNELS = "RGB"
+
+
+@dataclass
+class FitCheck:
+    """One row: ``material`` in fit set ``fit``.
+
+    ``asymmetry`` the largest relative asymmetry (reciprocity); ``max_albedo`` the
+    largest directional albedo over :data:`THETAS` and channels, at ``theta_deg``
+    in channel ``channel``; ``albedo_normal`` the largest channel at normal
+    incidence; ``error`` the integrator's error estimate of ``max_albedo``;
+    ``curve`` the largest channel's albedo at each angle of ``thetas``."""
+
+    material: str
+    fit: str
+    asymmetry: float
+    max_albedo: float
+    theta_deg: float
+    channel: str
+    albedo_normal: float
+    error: float
+    thetas: tuple
+    curve: tuple
+
+    @property
+    def reciprocal(self) -> bool:
+        return self.asymmetry <= RECIPROCITY_TOL
+
+    @property
+    def gains_energy(self) -> bool:
+        return self.max_albedo > 1.0 + TOL
+
+    def to_dict(self):
+        d = asdict(self)
+        d.update(reciprocal=self.reciprocal, gains_energy=self.gains_energy)
+        return d
+
+
+def albedo_curve_of_sum(model, thetas=THETAS):
+    """``(values, errors)`` of shape ``(len(thetas), channels)``: the directional
+    albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``."""
+    ch = model.channels or 1
+    vals = np.zeros((len(thetas), ch))
+    errs = np.zeros((len(thetas), ch))
+    for part, scale in zip(model.parts, model.scales):
+        s = np.ones(ch) if scale is None else np.broadcast_to(np.asarray(scale, dtype=np.float64), (ch,))
+        for i, t in enumerate(thetas):
+            r = albedo(part, direction(math.radians(t), 0.0))
+            v = np.broadcast_to(np.asarray(r.value, dtype=np.float64), (ch,))
+            e = np.broadcast_to(np.asarray(r.error, dtype=np.float64), (ch,))
+            vals[i] += s * v
+            errs[i] += s * e
+    return vals, errs
+
+
+def check_fit(name: str, fit: str, thetas=THETAS) -> FitCheck:
+    """The :class:`FitCheck` of one material of one fit set."""
+    return check_model(material(name, fit), name, fit, thetas)
+
+
+def check_model(model, name: str = "", fit: str = "", thetas=THETAS) -> FitCheck:
+    """The :class:`FitCheck` of any :class:`~plausible.models.sum.Sum` (``name``
+    and ``fit`` only label the row)."""
+    rec = reciprocity(model)
+    vals, errs = albedo_curve_of_sum(model, thetas)
+    i, c = np.unravel_index(int(np.argmax(vals)), vals.shape)
+    return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas[i]),
+                    CHANNELS[c] if vals.shape[1] == 3 else "grey", float(np.max(vals[0])),
+                    float(errs[i, c]), tuple(float(t) for t in thetas),
+                    tuple(float(x) for x in vals.max(axis=1)))
+
+
+def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None) -> list[FitCheck]:
+    """:func:`check_fit` of every material (or ``names``) of every loadable fit
+    set (or ``fits``).  ``progress``, if given, is called with no argument after
+    each fit.  Fit sets that cannot be loaded are skipped (see
+    :attr:`plausible.library.FitSet.reason`)."""
+    keys = [fit_set(k).key for k in fits] if fits else [f.key for f in all_fits() if f.built]
+    rows = []
+    for key in keys:
+        if not fit_set(key).built:
+            continue
+        avail = materials(key)
+        for name in (names if names is not None else avail):
+            if name not in avail:
+                continue
+            rows.append(check_fit(name, key, thetas))
+            if progress:
+                progress()
+    return rows
+
+
+def summary(rows) -> list[dict]:
+    """Per fit set: how many fits, how many gain energy, the largest albedo and
+    where, the median of the largest albedos, the largest asymmetry."""
+    out = []
+    for key in dict.fromkeys(r.fit for r in rows):
+        rs = [r for r in rows if r.fit == key]
+        worst = max(rs, key=lambda r: r.max_albedo)
+        out.append(dict(fit=key, n=len(rs), gain=sum(r.gains_energy for r in rs),
+                        worst=worst.material, worst_albedo=worst.max_albedo, worst_theta=worst.theta_deg,
+                        median=float(np.median([r.max_albedo for r in rs])),
+                        asymmetry=max(r.asymmetry for r in rs)))
+    return out
+
+
+def markdown(rows, only_gains: bool = False) -> str:
+    """The summary table, then one row per fit (only those gaining energy when
+    ``only_gains``)."""
+    lines = ["| fit | fits | gain energy | largest albedo (material, angle) | median of the largest albedos "
+             "| largest asymmetry |", "|---|---|---|---|---|---|"]
+    for s in summary(rows):
+        lines.append(f"| {s['fit']} | {s['n']} | {s['gain']} | {s['worst_albedo']:.4f} ({s['worst']}, "
+                     f"{s['worst_theta']:g}°) | {s['median']:.4f} | {s['asymmetry']:.1e} |")
+    lines += ["", "| material | fit | reciprocal (asymmetry) | largest albedo | at θ_i | channel "
+              "| albedo at 0° | gains energy |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if only_gains and not r.gains_energy:
+            continue
+        gain = f"yes, +{100 * (r.max_albedo - 1):.1f} %" if r.gains_energy else "no"
+        lines.append(f"| {r.material} | {r.fit} | {'yes' if r.reciprocal else 'NO'} ({r.asymmetry:.1e}) | "
+                     f"{r.max_albedo:.4f} | {r.theta_deg:g}° | {r.channel} | {r.albedo_normal:.4f} | {gain} |")
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["FitCheck", "THETAS", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model", "markdown", "summary"]

@@ -1,0 +1,160 @@
+"""Real materials: the plausibility of the published MERL fits, and an atlas of them.
+
+* ``materials-check``: :func:`plausible.analysis.materials.check_fits` on every
+  loadable fit set for a sample of materials (all materials: ``scripts/materials_table.py``,
+  ``docs/materials.md``): reciprocity and the largest directional albedo.
+* ``materials-atlas``: every material of one fit set on spheres, and one material
+  across every fitted model, rendered in Mitsuba with ``plausible_material``
+  under a constant sky, a soft box and a point light.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import figure
+from . import scenes as S
+
+#: Materials of the check figure (diffuse, glossy plastic, metal, paint, fabric, the brightest ones).
+CHECK_MATERIALS = ("pink-felt", "blue-acrylic", "nickel", "gold-metallic-paint", "red-fabric", "white-paint",
+                   "chrome", "yellow-plastic")
+QUICK_CHECK = (("pink-felt", "nickel"), ("ngan2005/ward-duer", "ngan2005/ashikhmin-shirley"))
+
+
+@figure("materials-check", "Which published fits of the MERL materials are physically plausible?",
+        "Ngan, Durand, Matusik 2005; Löw et al. 2012 (fits via bbm)",
+        "Fitted parameters of measured materials are used as if they were plausible. Here every fit is "
+        "checked: reciprocity (largest relative asymmetry) and the largest directional albedo over incidence "
+        "and RGB channel; a value above 1 gains energy. The complete table of every material is "
+        "docs/materials.md (scripts/materials_table.py).",
+        materials=CHECK_MATERIALS, fits="every loadable fit set (quick: 2 materials x 2 fits)")
+def materials_check(ctx, materials, fits):
+    from plausible import library
+    from plausible.analysis.materials import TOL, check_fits, markdown
+
+    if ctx.quick:
+        names, keys = QUICK_CHECK
+    else:
+        names, keys = materials, [f.key for f in library.fits() if f.built]
+    keys = list(keys)
+    ctx.steps(len(names) * len(keys))
+    rows = check_fits(keys, list(names), progress=ctx.tick)
+    md = markdown(rows)
+    (ctx.out / "materials-check.md").write_text(md)
+    ctx.file("materials-check.md", "the table (summary, then one row per fit)")
+    ctx.json("materials-check", [r.to_dict() for r in rows], "every row, with the albedo curve")
+    ctx.plot("materials-check", _heatmap(rows, list(names), keys, TOL),
+             caption="largest directional albedo (max over incidence and RGB); red: above 1 (gains energy)")
+    for key in keys:
+        rs = [r for r in rows if r.fit == key]
+        ctx.measure(f"{key}: largest relative asymmetry", max(r.asymmetry for r in rs), at_most=1e-9,
+                    note="a sum of reciprocal terms is reciprocal")
+        worst = max(rs, key=lambda r: r.max_albedo)
+        ctx.measure(f"{key}: largest directional albedo", worst.max_albedo,
+                    note=f"{worst.material} at {worst.theta_deg:g} deg ({worst.channel}); "
+                         f"{sum(r.gains_energy for r in rs)} of {len(rs)} fits gain energy")
+
+
+def _heatmap(rows, names, keys, tol):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LinearSegmentedColormap
+    from matplotlib.patches import Rectangle
+
+    grid = np.full((len(names), len(keys)), np.nan)
+    for r in rows:
+        grid[names.index(r.material), keys.index(r.fit)] = r.max_albedo
+    fig, ax = plt.subplots(figsize=(max(4.5, 1.6 + 0.9 * len(keys)), 1.8 + 0.42 * len(names)))
+    cmap = LinearSegmentedColormap.from_list("a", ["#f7fbff", "#6baed6", "#08306b"])
+    ax.imshow(np.minimum(grid, 1.0), cmap=cmap, vmin=0, vmax=1, aspect="auto")
+    for i in range(len(names)):
+        for j in range(len(keys)):
+            v = grid[i, j]
+            if np.isfinite(v):
+                gain = v > 1 + tol
+                if gain:
+                    ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, facecolor="#fcbba1", edgecolor="#cb181d"))
+                ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7,
+                        color="#99000d" if gain else ("white" if v > 0.55 else "black"),
+                        fontweight="bold" if gain else "normal")
+    ax.set_xticks(range(len(keys)))
+    ax.set_xticklabels(keys, rotation=40, ha="right", fontsize=7)
+    ax.set_yticks(range(len(names)))
+    ax.set_yticklabels(names, fontsize=7)
+    ax.set_title("largest directional albedo\n(red: above 1, the fit gains energy)", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+# -- the atlas --------------------------------------------------------------------------
+
+def _spheres(mi, bsdfs, cols, res_cell, spp):
+    """Unit spheres on a grid seen from above (orthographic): one image, cut into
+    cells (row-major, like ``bsdfs``)."""
+    rows = math.ceil(len(bsdfs) / cols)
+    spacing = 2.3
+    d = {"type": "scene", "integrator": {"type": "path", "max_depth": 4},
+         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 0.3}},
+         "sun": {"type": "directional", "direction": [0.45, 0.35, -0.82],
+                 "irradiance": {"type": "rgb", "value": 2.5}},
+         "softbox": {"type": "rectangle",
+                     # outside the orthographic view (|x| <= cols * spacing / 2): seen only in reflections
+                     "to_world": mi.ScalarTransform4f().look_at(origin=[-8.0 - cols * spacing / 2, 12.0, 9.0],
+                                                                target=[0, 0, 0], up=[0, 0, 1])
+                     @ mi.ScalarTransform4f().scale(4.0),
+                     "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 3.0}}}}
+    for i, b in enumerate(bsdfs):
+        r, c = divmod(i, cols)
+        d[f"s{i}"] = {"type": "sphere", "center": [(c - (cols - 1) / 2) * spacing,
+                                                   ((rows - 1) / 2 - r) * spacing, 0.0],
+                      "radius": 1.0, "bsdf": b}
+    w, h = cols * res_cell, rows * res_cell
+    half = cols * spacing / 2
+    d["sensor"] = S.orthographic(mi, half, w, spp, origin=(0, 0, 10), height=h)
+    # Mitsuba's orthographic film spans x in [-1, 1] and y in [-h/w, h/w]: scale both by ``half``
+    d["sensor"]["to_world"] = mi.ScalarTransform4f().look_at(origin=[0, 0, 10], target=[0, 0, 0], up=[0, 1, 0]) \
+        @ mi.ScalarTransform4f().scale([half, half, 1.0])
+    img = S.render(mi, mi.load_dict(d), seed=0)
+    return [img[r * res_cell:(r + 1) * res_cell, c * res_cell:(c + 1) * res_cell]
+            for i in range(len(bsdfs)) for r, c in [divmod(i, cols)]]
+
+
+@figure("materials-atlas", "Atlas of the MERL materials as published fits", "Ngan, Durand, Matusik 2005; Löw et al. "
+        "2012 (fits via bbm)", "Every material of one fit set, and one material across every fitted model, "
+        "rendered with the plausible_material plugin (Lambertian + the fitted lobe, RGB) under a sky, a soft box "
+        "and a distant light. The measured MERL data themselves are not shown.", renders=True,
+        fit="ngan2005/ashikhmin-shirley", material="gold-metallic-paint")
+def materials_atlas(ctx, fit, material):
+    from plausible import library
+
+    mi = S.mitsuba()
+    names = list(library.materials(fit))
+    keys = [f.key for f in library.fits() if f.built and material in library.materials(f.key)]
+    if ctx.quick:
+        names = names[:12]
+    ctx.steps(2)
+    cols = 10 if len(names) > 20 else 6
+    cell = max(24, ctx.res(0.3))    # 96 px per sphere at the default 320
+    spp = ctx.spp(0.25)
+    imgs = _spheres(mi, [{"type": "plausible_material", "name": n, "fit": fit} for n in names], cols, cell, spp)
+    ctx.tick()
+    rows = math.ceil(len(names) / cols)
+    ctx.image("atlas", S.mosaic(imgs + [np.zeros_like(imgs[0])] * (rows * cols - len(imgs)), rows, cols),
+              caption=f"every material of {fit}, row-major in the order of the labelled plot")
+    ctx.plot("atlas-labelled", S.grid_figure(imgs, rows, cols, names, title=f"MERL materials, fit {fit}"))
+    imgs2 = _spheres(mi, [{"type": "plausible_material", "name": material, "fit": k} for k in keys],
+                     len(keys), cell, spp)
+    ctx.tick()
+    ctx.image("one-material", S.mosaic(imgs2, 1, len(keys)), caption=f"{material}, left to right: {', '.join(keys)}")
+    ctx.plot("one-material-labelled", S.grid_figure(imgs2, 1, len(keys), keys,
+                                                    title=f"{material} across the fitted models"))
+    # measured: the mean radiance of each sphere cell (the fits of one material should look alike)
+    means = [float(np.mean(im)) for im in imgs2]
+    ctx.table("one-material", {"fit": np.arange(len(keys)), "mean": means},
+              caption="mean pixel value of each sphere cell, fits in the order " + ", ".join(keys))
+    ctx.measure(f"{material}: spread of the mean cell value across fits (max / min)", max(means) / max(min(means), 1e-12),
+                note="the fits target the same measured material")

@@ -1,0 +1,56 @@
+"""The plausibility table of the published fits: its numbers come back from the
+public API, and the checker fails on models that are broken on purpose."""
+
+import math
+
+import numpy as np
+import pytest
+
+import plausible
+from plausible.analysis.albedo import direction
+from plausible.analysis.materials import check_fit, check_model, markdown, summary
+from plausible.models.sum import Sum
+
+
+#: A short grid keeps the tests fast (the table uses THETAS).
+GRID = (0.0, 60.0, 89.9)
+
+
+@pytest.fixture(scope="module")
+def row():
+    return check_fit("nickel", "ngan2005/ward-duer", thetas=GRID)
+
+
+def test_the_rows_largest_albedo_is_plausible_albedo_of_the_material(row):
+    m = plausible.material("nickel", "ngan2005/ward-duer")
+    a = plausible.albedo(m, direction(math.radians(row.theta_deg), 0.0))
+    k = "RGB".index(row.channel)
+    assert row.max_albedo == pytest.approx(float(a.value[k]), abs=2e-4)
+    # and it is the largest over the grid and the channels
+    others = [np.max(plausible.albedo(m, direction(math.radians(t), 0.0)).value) for t in (0.0, 60.0)]
+    assert max(others) <= row.max_albedo + 1e-9
+
+
+def test_the_rows_asymmetry_is_plausible_reciprocity(row):
+    assert row.asymmetry == plausible.reciprocity(plausible.material("nickel", "ngan2005/ward-duer")).figure
+    assert row.reciprocal and row.thetas == GRID
+
+
+def test_a_model_that_gains_energy_is_flagged_with_where():
+    # Ward-Dür's 1 / (cos_i cos_o) grows without bound toward grazing incidence
+    r = check_model(Sum([plausible.make("ward", alpha_x=0.3, alpha_y=0.3, rs=1.0, variant="duer")]), "w", "test", GRID)
+    assert r.gains_energy and r.max_albedo > 1.5 and r.theta_deg == max(GRID)
+    assert "yes, +" in markdown([r])
+
+
+def test_a_non_reciprocal_part_is_flagged():
+    r = check_model(Sum([plausible.make("lambertian", rd=0.2), plausible.make("phong", ks=0.5, n=10)]), "p", "test", GRID)
+    assert not r.reciprocal and r.asymmetry > 1e-3
+    assert "| NO (" in markdown([r])
+
+
+def test_a_plausible_material_passes_and_the_summary_counts_it(row):
+    ok = check_fit("nickel", "ngan2005/ashikhmin-shirley", thetas=GRID)
+    assert ok.reciprocal and not ok.gains_energy
+    s = summary([row, ok])
+    assert [x["n"] for x in s] == [1, 1]
