@@ -255,3 +255,36 @@ def test_lobe3d_is_f_cos_on_its_grid(client):
         wo = [math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)]
         wi = [-math.sin(math.radians(40)), 0.0, math.cos(math.radians(40))]
         assert d["fcos"][7][11] == pytest.approx(float(np.mean(m.eval(wi, wo))) * math.cos(t), rel=1e-12)
+
+
+def test_published_materials_are_in_the_catalogue_and_export(client):
+    entry = client.get("/api/models").json()[-1]
+    assert entry["name"] == "material"
+    assert set(entry["params"][0]["choices"]) == set(plausible.materials())
+    body = {"model": "material", "params": {"name": "gold-metallic-paint", "fit": "ngan2005/ward-duer"}}
+    d = client.post("/api/albedo", json=body).json()
+    direct = plausible.albedo_curve(plausible.material("gold-metallic-paint", fit="ngan2005/ward-duer"),
+                                    np.radians(d["theta"]))
+    assert np.allclose(d["value"], direct.value, rtol=1e-9)
+    assert d["energy_gained_at"] == [t for t, a, e in zip(d["theta"], np.max(direct.value, -1),
+                                                          np.max(direct.error, -1)) if a - e > 1 + views.ENERGY_TOL]
+    spec = client.post("/api/export", json=dict(body, format="spec")).text.strip()
+    assert spec == "material:gold-metallic-paint@ngan2005/ward-duer"
+    assert repr(plausible.registry.make_from_spec(spec)) == repr(plausible.material("gold-metallic-paint",
+                                                                                      fit="ngan2005/ward-duer"))
+    r = client.post("/api/plane", json={"model": "material", "params": {"name": "alum-brnze"}})
+    assert r.status_code == 422 and "alum-bronze" in r.json()["error"]      # the closest name is suggested
+
+
+def test_a_material_can_be_selected_in_the_page(page):
+    page.select_option("#model-A", "material")
+    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.sides.A.drawn >= 1 "
+                           "&& window.explorer.data.A.plane", timeout=60_000)
+    page.select_option("[data-param=name] select", "gold-metallic-paint")
+    page.wait_for_timeout(400)
+    _idle(page)
+    asked = page.evaluate("window.explorer.data.A.asked")
+    assert asked["params"]["name"] == "gold-metallic-paint"
+    want = views.plane(plausible.material("gold-metallic-paint"), asked["theta_i"])["fcos"]
+    assert np.allclose(page.evaluate("window.explorer.data.A.plane.fcos"), want, rtol=1e-12)
+    assert page.locator("#status").inner_text() == "" and page.errors == []

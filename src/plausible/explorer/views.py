@@ -79,9 +79,30 @@ def param_spec(p, value=None) -> dict:
             "choices": list(p.choices)}
 
 
+#: The catalogue's entry for the published MERL fits (:func:`plausible.material`).
+MATERIAL = "material"
+
+
+def _material_entry() -> dict:
+    from .. import library
+
+    names = sorted(library.materials())
+    fits = [f.key for f in library.fits() if f.built]
+    return {"name": MATERIAL, "reciprocal": True, "energy_conserving": False,
+            "description": "A published fit of a MERL material (Ngan, Durand & Matusik 2005; Low et al. "
+                           "2012): plausible.material(name, fit), a sum of the fitted model's terms.",
+            "params": [{"name": "name", "kind": "choice", "doc": "MERL material", "default": "alum-bronze",
+                        "choices": names, "range": f"{len(names)} materials", "lo": 0, "hi": 0,
+                        "scale": "linear", "integer": False},
+                       {"name": "fit", "kind": "choice", "doc": "published fit set",
+                        "default": library.DEFAULT_FIT, "choices": fits, "range": f"{len(fits)} fit sets",
+                        "lo": 0, "hi": 0, "scale": "linear", "integer": False}]}
+
+
 def model_catalogue() -> list[dict]:
     """Every registered model: name, description, claims, parameter specs (with
-    the defaults as the model resolves them)."""
+    the defaults as the model resolves them); last, the published materials
+    (:data:`MATERIAL`, parameters ``name`` and ``fit``)."""
     out = []
     for name in registry.names():
         info = registry.info(name)
@@ -89,6 +110,7 @@ def model_catalogue() -> list[dict]:
         out.append({"name": name, "description": info.description, "reciprocal": info.reciprocal,
                     "energy_conserving": info.energy_conserving,
                     "params": [param_spec(p, m.params[p.name]) for p in info.params]})
+    out.append(_material_entry())
     return out
 
 
@@ -96,6 +118,14 @@ def build(name: str, params: dict | None = None):
     """The model ``name`` with ``params`` as the page sends them (numbers, lists
     of numbers, strings in the command line's syntax).  Raises the model's own
     :class:`ValueError` (parameter, range, value) for anything out of range."""
+    if name == MATERIAL:
+        from .. import library
+
+        ps = dict(params or {})
+        unknown = sorted(set(ps) - {"name", "fit"})
+        if unknown:
+            raise ValueError(f"material: unknown parameter(s) {', '.join(unknown)}; allowed: name, fit")
+        return library.material(str(ps.get("name", "alum-bronze")), fit=str(ps.get("fit", library.DEFAULT_FIT)))
     info = registry.info(name)
     kinds = {p.name: p.kind for p in info.params}
     ps = {}
@@ -178,7 +208,11 @@ def verdict(model) -> dict:
 
     rep = check(model, quick=True)
     d = json.loads(json.dumps(rep.to_dict(), default=str))
-    info = registry.info(model.name)
+    info = model.info if getattr(model, "info", None) is not None else None
+    if info is None:        # a published material: reciprocal when its terms are, no energy claim
+        from types import SimpleNamespace
+
+        info = SimpleNamespace(reciprocal=bool(getattr(model, "reciprocal", False)), energy_conserving=False)
     d["claims"] = {"reciprocal": info.reciprocal, "energy_conserving": info.energy_conserving}
     d["as_claimed"] = bool(rep.as_claimed(info))
     return d
@@ -208,6 +242,8 @@ def export(model, fmt: str) -> tuple[str, str]:
     if fmt not in FORMATS:
         raise ValueError(f"export format must be one of {', '.join(FORMATS)}, got {fmt!r}")
     stem = model.name
+    if model.info is None and "@" in stem:        # a published material (plausible.material)
+        return _export_material(model, fmt)
     if fmt == "spec":
         text = spec_string(model) + "\n"
     elif fmt == "mitsuba-dict":
@@ -221,5 +257,25 @@ def export(model, fmt: str) -> tuple[str, str]:
     return stem + FORMATS[fmt][0], text
 
 
-__all__ = ["FORMATS", "albedo", "build", "export", "half_diff_slice", "lobe3d", "model_catalogue",
+def _export_material(model, fmt: str) -> tuple[str, str]:
+    """A published material: ``material:NAME@FIT``, the ``plausible_material`` plugin,
+    or its GLSL / ``.brdf`` (every term baked in)."""
+    name, fit = model.name.split("@", 1)
+    stem = f"{name}-{fit.replace('/', '-')}"
+    d = {"type": "plausible_material", "name": name, "fit": fit}
+    if fmt == "spec":
+        text = f"material:{model.name}\n"
+    elif fmt == "mitsuba-dict":
+        text = json.dumps(d, indent=2) + "\n"
+    elif fmt == "mitsuba-xml":
+        text = (f'<bsdf type="plausible_material" id="{name}">\n    <string name="name" value="{name}"/>\n'
+                f'    <string name="fit" value="{fit}"/>\n</bsdf>\n')
+    else:
+        from ..export import to_brdf, to_glsl
+
+        text = str(to_glsl(model)) if fmt == "glsl" else to_brdf(model)
+    return stem + FORMATS[fmt][0], text
+
+
+__all__ = ["FORMATS", "MATERIAL", "albedo", "build", "export", "half_diff_slice", "lobe3d", "model_catalogue",
            "param_spec", "plane", "shader", "verdict"]
