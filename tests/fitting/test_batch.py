@@ -68,19 +68,29 @@ def test_failed_fits_rerun_only_when_asked(tmp_path):
     assert batch.fit_batch(*args, workers=0, retry_failed=True).done == 1
 
 
-def test_killed_batch_resumes_without_loss_or_repeat(tmp_path):
-    targets = [f"lambertian:rd={x}" for x in (0.1, 0.3, 0.5, 0.7, 0.9)]
-    out = tmp_path / "res"
-    cmd = [sys.executable, "-c", "from plausible.cli import main; main()", "fit-batch", *targets,
+TEN = [f"lambertian:rd={x}" for x in (0.1, 0.3, 0.5, 0.7, 0.9)]     # x 2 models: ten fits
+
+
+def _batch_until_rows(out, rows, **popen):
+    """Start `plausible fit-batch` on :data:`TEN` in a subprocess; return it once
+    ``rows`` rows are in the tables (or it ended)."""
+    cmd = [sys.executable, "-c", "from plausible.cli import main; main()", "fit-batch", *TEN,
            "--models", "lambertian,modified-phong", "--metrics", "l2-cos", "--out", str(out),
            "--workers", "0", "--starts", "1"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    proc = subprocess.Popen(cmd, **popen)
     files = [out / "fits" / "lambertian.csv", out / "fits" / "modified-phong.csv"]
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:
-        if sum(len(f.read_text().splitlines()) - 1 for f in files if f.exists()) >= 2:
+        if sum(len(f.read_text().splitlines()) - 1 for f in files if f.exists()) >= rows:
             break
         time.sleep(0.05)
+    return proc, files
+
+
+def test_killed_batch_resumes_without_loss_or_repeat(tmp_path):
+    targets, out = TEN, tmp_path / "res"
+    proc, files = _batch_until_rows(out, 2, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                    start_new_session=True)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     with open(files[0], "a") as fh:           # a crash in the middle of a write
@@ -163,18 +173,8 @@ def test_cli_fit_batch_names_a_bad_model(tmp_path):
 
 
 def test_ctrl_c_keeps_finished_fits_and_says_how_to_resume(tmp_path):
-    targets = [f"lambertian:rd={x}" for x in (0.1, 0.3, 0.5, 0.7, 0.9)]
     out = tmp_path / "res"
-    cmd = [sys.executable, "-c", "from plausible.cli import main; main()", "fit-batch", *targets,
-           "--models", "lambertian,modified-phong", "--metrics", "l2-cos", "--out", str(out),
-           "--workers", "0", "--starts", "1"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    table = out / "fits" / "lambertian.csv"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and proc.poll() is None:
-        if table.exists() and len(table.read_text().splitlines()) >= 2:
-            break
-        time.sleep(0.05)
+    proc, _ = _batch_until_rows(out, 1, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     proc.send_signal(signal.SIGINT)
     output, _ = proc.communicate(timeout=60)
     assert proc.returncode == 130, output
