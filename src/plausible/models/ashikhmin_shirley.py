@@ -81,13 +81,14 @@ def specular(ops, wi, wo, nu, nv, rs):
     ``      = p_h(h) F(h.k) / (4 (h.k) max(n.k1, n.k2))``
 
     with ``F`` Schlick's approximation (journal eq. 3) and ``p_h`` journal eq. 6.
-    ``h.k`` is the mean of ``k1.h`` and ``k2.h`` (equal in exact arithmetic), which
-    makes the value bitwise reciprocal.  Zero unless both directions are above
-    the horizon.
+    ``h.k = |k1 + k2| / 2`` (:func:`plausible.vec.half_vector_cos`; equal to
+    ``k1.h`` and ``k2.h`` in exact arithmetic): bitwise reciprocal, accurate at
+    grazing incidence where the dot products cancel, and the same ``h.k`` as
+    the density :func:`specular_pdf`, so ``f cos / pdf`` stays bounded in
+    float32 too.  Zero unless both directions are above the horizon.
     """
     ok = above(ops, wi, wo)
-    h = vec.half_vector(ops, wi, wo)
-    kh = 0.5 * (vec.dot(wi, h) + vec.dot(wo, h))
+    h, kh = vec.half_vector_cos(ops, wi, wo)
     ok = ok & (kh > 0)
     den = 4.0 * ops.where(ok, kh * ops.maximum(wi[2], wo[2]), 1.0)
     val = half_vector_density(ops, h, nu, nv) * schlick(ops, kh, rs) / den

@@ -211,8 +211,8 @@ class PumpedUp(BxDF):
         f = self.base._f(ops, wi, wo, self.base.p)
         g = self.g(ops, wi, wo)
         ok = above(ops, wi, wo) & (g > 0.0)
-        h = vec.half_vector(ops, wi, wo)
-        F = fresnel.weight(ops, p.fresnel, vec.dot(wi, h), p.rs, p.eta, p.k)
+        kh = vec.half_vector_cos(ops, wi, wo)[1]
+        F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
         return ops.where(ok, F * f / ops.where(ok, g, 1.0), 0.0)
 
     def _pdf(self, ops, wi, wo, q):

@@ -128,8 +128,7 @@ def sample_half_vector(ops, r, p, u1, u2):
 def schlick_specular(ops, wi, wo, r, p, rs, form):
     """``F(u) G(v) G(v') Z(t) A(w) / (4 pi v v')`` (Schlick 1994, single slope)."""
     ok = above(ops, wi, wo)
-    h = vec.half_vector(ops, wi, wo)
-    u = vec.dot(wi, h)
+    h, u = vec.half_vector_cos(ops, wi, wo)
     s = h[0] * h[0] + h[1] * h[1]
     v = ops.where(ok, wi[2], 1.0)
     vp = ops.where(ok, wo[2], 1.0)
