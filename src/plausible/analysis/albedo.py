@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bxdf import as_directions
 from .quadrature import hemisphere_grid
 
 
@@ -73,13 +74,9 @@ def albedo(model, wi, *, m: int = 12, m_low: int = 8, levels: int = 13,
     :class:`AlbedoResult` with the ``m``-point estimate and the difference to
     the ``m_low``-point rule as its error bound.  Zero for ``wi`` below the horizon.
     """
-    wi = np.asarray(wi, dtype=np.float64)
+    wi = as_directions("wi", wi)  # names wi in every error (a string, NaN, a zero vector)
     if wi.shape != (3,):
         raise ValueError(f"wi must be one direction of shape (3,), got {wi.shape}")
-    nrm = np.linalg.norm(wi)
-    if not np.isfinite(nrm) or nrm == 0:
-        raise ValueError("wi must be a finite, non-zero vector")
-    wi = wi / nrm
     if wi[2] <= 0:
         z = np.zeros(model.channels) if model.channels else 0.0
         return AlbedoResult(z, z)

@@ -64,17 +64,26 @@ def zenith(ops, sin2_h, r):
     return r / (den * den)
 
 
+#: ``sin^2(theta_h)`` below which a half vector counts as the pole ``h = n``
+#: (see :func:`azimuth_normalised`).
+POLE_SIN2 = 1e-12
+
+
 def azimuth_normalised(ops, hx, hy, p):
     """``A(w) = p / (p^2 - p^2 w^2 + w^2)`` with ``w^2 = hx^2 / (hx^2 + hy^2)``.
 
     Computed as ``p (hx^2 + hy^2) / (hx^2 + p^2 hy^2)`` (no division by zero
-    off the pole); at the pole (``hx = hy = 0``, where ``w`` is undefined) the
-    value is 1, the mean over ``phi``.  Normalised:
-    ``(1 / 2 pi) int_0^{2 pi} A(cos phi) d phi = 1``.
+    off the pole); at the pole, where ``w`` is undefined, the value is 1, the
+    mean over ``phi``.  "The pole" is ``hx^2 + hy^2 <= POLE_SIN2`` (``theta_h``
+    below 1e-6 rad): there ``hx, hy`` of a unit half vector are rounding noise
+    (about 1e-16 in float64, 1e-7 in float32, e.g. at the exact mirror direction,
+    where the sampler and ``pdf()`` would otherwise get any ``A`` in
+    ``[p, 1/p]`` from the last bits).  The cap has solid angle ``pi 1e-12``.
+    Normalised: ``(1 / 2 pi) int_0^{2 pi} A(cos phi) d phi = 1``.
     """
     s = hx * hx + hy * hy
     den = hx * hx + p * p * hy * hy
-    pos = s > 0
+    pos = s > POLE_SIN2
     return ops.where(pos, p * s / ops.where(pos, den, 1.0), 1.0)
 
 
