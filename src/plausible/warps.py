@@ -8,6 +8,7 @@ the same code runs on NumPy and on Dr.Jit.
 from __future__ import annotations
 
 from . import vec
+from .bxdf import HORIZON
 from .ops import INV_PI, PI
 
 
@@ -211,10 +212,11 @@ def reflected_pdf(ops, wi, wo, half_vector_pdf):
     ``half_vector_pdf(h)``: ``p_h(h) / (4 (wi.h))`` with ``h`` the half vector
     of ``wi`` and ``wo`` (the change of measure ``d omega_o = 4 (wi.h) d omega_h``;
     Ashikhmin & Shirley 2000, journal eq. 8).  Zero unless ``wi.h > 0`` and both
-    directions are above the horizon.  Generic in the half-vector distribution
+    directions are above the horizon (``cos(theta) > HORIZON``, as for ``f`` and
+    for the pdf that ``sample`` returns).  Generic in the half-vector distribution
     (used by the Schlick model; :func:`reflected_half_vector_pdf` is the same
     change of measure for the Ashikhmin-Shirley distribution).
     """
     h, kh = vec.half_vector_cos(ops, wi, wo)  # wi.h from |wi + wo| (exact at grazing)
-    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
+    ok = (kh > 0) & (wo[2] > HORIZON) & (wi[2] > HORIZON)
     return ops.where(ok, half_vector_pdf(h) / (4.0 * ops.where(ok, kh, 1.0)), 0.0)

@@ -7,8 +7,8 @@ import math
 from dataclasses import dataclass, field
 
 from .albedo import direction, is_isotropic
-from .checks import (ENERGY_THETAS, PropertyResult, _jsonable, energy, energy_directions, reciprocity,
-                     sampling_consistency)
+from .checks import (ENERGY_THETAS, PropertyResult, _jsonable, energy, energy_directions, grazing_thetas,
+                     reciprocity, sampling_consistency)
 from .chi2 import chi2
 
 #: Incidences (theta, phi in degrees) of the default chi-square tests.
@@ -86,7 +86,7 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     """
     iso = is_isotropic(model)
     chi_dirs = CHI2_DIRECTIONS if iso else CHI2_DIRECTIONS_ANISO
-    thetas = (0, 30, 60, 80, 89.9) if quick else ENERGY_THETAS
+    thetas = (0, 30, 60, 80, 89.9) + grazing_thetas((1e-5, 1e-9)) if quick else ENERGY_THETAS
     e_dirs = energy_directions(model, thetas)
     s_thetas = (0, 45, 85) if quick else (0, 30, 60, 80, 89)
     s_phis = (0,) if iso else (0, 45)
