@@ -9,10 +9,13 @@ An operator on any reciprocal BRDF ``f`` (``neumann-neumann-szirmay-kalos-albedo
 
 Then ``a(L) <= a*(L) <= 1`` (eq. 18-19): ``a*(L) = int f / g cos <= int f / a(L) cos = 1``.
 The proof needs only ``g >= max(a(L), a(V))``; the upper bound ``g <= 1`` of
-eq. 17 is what makes the albedo grow, so a base whose albedo exceeds 1 (Ward,
-Cook-Torrance with ``G = 1`` at grazing) is made energy conserving by one
+eq. 17 is what makes the albedo grow, so a base whose albedo exceeds 1 but stays
+bounded (balanced Ward with ``rs = 1, rd = 0.3``) is made energy conserving by one
 application ("even if the original BRDF is only symmetric, but is not energy
 preserving, then the first pumping-up operation makes it energy preserving").
+A base whose albedo diverges at the horizon (Ward 1992, Dür's Ward, Cook-Torrance
+with ``G = 1``: the paper's sec. 2.1) has no finite ``g`` and is refused
+(:func:`check_bounded_albedo`).
 
 Applied ``times`` times, each level divides by the ``g`` built from the albedo of
 the level below: ``f_k = f_{k-1} / g(a_{k-1})``.  Each level's albedo is
