@@ -92,6 +92,9 @@ def _max_abs(a: np.ndarray) -> np.ndarray:
 #: ``|a|^2`` outside ``(_SAFE_LO, _SAFE_HI)`` may have under- or overflowed: those
 #: rows are rescaled by their largest component before normalising.
 _SAFE_LO, _SAFE_HI = 1e-290, 1e290
+#: ``| |a|^2 - 1 |`` up to which a direction counts as unit (about 18 ulp; a
+#: normalised vector is within 3 ulp of it).
+UNIT_TOL = 4e-15
 
 
 def _check_block(name: str, b: np.ndarray, check_zero: bool = True):
@@ -120,10 +123,15 @@ def _normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
     """``a / |a|`` (``s``: ``_norm2(a)`` if already computed).  Rows whose
     ``|a|^2`` under- or overflows (components below 1e-145 or above 1e145) are
     first divided by their largest component, so ``[1e200, 0, 1e200]`` and
-    ``[1e-170, 0, 1e-170]`` give the direction of ``[1, 0, 1]``."""
+    ``[1e-170, 0, 1e-170]`` give the direction of ``[1, 0, 1]``.  Rows already
+    unit to rounding (``| |a|^2 - 1 | <= UNIT_TOL``, e.g. a sampled ``wo``) are
+    kept as given: normalising twice moves a direction by an ulp, and a density
+    that is steep there (a ``cos^n`` lobe with ``n < 1`` near its edge, a
+    direction at the horizon threshold) would then differ from the pdf that
+    ``sample`` returned for it."""
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
         s = _norm2(a) if s is None else s
-        out = a / np.sqrt(s)[..., None]
+        out = np.where((np.abs(s - 1.0) <= UNIT_TOL)[..., None], a, a / np.sqrt(s)[..., None])
         bad = ~((s > _SAFE_LO) & (s < _SAFE_HI))
         if np.any(bad):
             b = np.broadcast_to(a, out.shape)[bad]
