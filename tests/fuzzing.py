@@ -26,7 +26,8 @@ probabilities ``p_k``, ``weight <= sum_k sup(f_k cos / pdf_k) / p_k``):
   ``rs (k.h) h_z^3 / cos_i <= rs / cos_i`` (Dür), ``rs cos_o / ((k.h) h_z) <= 2 rs``
   (balanced); diffuse ``rd``;
 * Schlick: ``F (G(v)/v) G(v') (k.h) / h_z <= 2 / (r cos_i)`` (``G(v)/v <= 1/r``, ``G <= 1``,
-  ``(k.h)/h_z < 2 / cos_i`` as above); diffuse ``rd``;
+  ``(k.h)/h_z < 2 / cos_i`` as above), times ``1/sqrt(p)`` for ``azimuth="sqrt"``
+  (``f`` has ``sqrt(A)`` where the sampler has ``A``, ``A >= p``); diffuse ``rd``;
 * pumped-up (eq. 16-17): ``F w_base / prod g_k <= bound(base) / prod a_k(wi)``;
 * Lafortune: no closed bound derived here (``None``: finiteness and consistency only).
 """
@@ -186,7 +187,9 @@ def weight_bound(m, wi):
         return _mix(type(m).spec_probability(q), _cmax(p["rs"]) * spec, _cmax(p["rd"]) * one)
     if name == "schlick":
         ps = m._spec_probability(NP, wi.T, q)
-        return _mix(ps, 2.0 / (p["r"] * ci), _cmax(p["rd"]) * one)
+        # azimuth="sqrt": f has sqrt(A) where the sampler has A, A in [p, 1/p]: 1/sqrt(p) more
+        az = 1.0 / math.sqrt(p["p"]) if p["azimuth"] == "sqrt" else 1.0
+        return _mix(ps, 2.0 * az / (p["r"] * ci), _cmax(p["rd"]) * one)
     if name == "pumped-up":
         b = weight_bound(m.base, wi)
         if b is None:
