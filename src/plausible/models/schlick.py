@@ -181,11 +181,18 @@ class Schlick(BxDF):
         pos = tot > 0
         return ops.where(pos, fs / ops.where(pos, tot, 1.0), 0.5)
 
+    def _diffuse_probability(self, ops, wi, q):
+        # rd / (F + rd) as its own quotient, not 1 - ps (which rounds to 0 in float32
+        # for rd < 6e-8 while the diffuse term stays)
+        tot = fresnel.schlick(ops, wi[2], q.rs) + q.rd
+        pos = tot > 0
+        return ops.where(pos, q.rd / ops.where(pos, tot, 1.0), 0.5)
+
     def _pdf(self, ops, wi, wo, q):
         ps = self._spec_probability(ops, wi, q)
         spec = warps.reflected_pdf(ops, wi, wo, lambda h: half_vector_pdf(ops, h, q.r, q.p))
         diff = ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
-        return ps * spec + (1.0 - ps) * diff
+        return ps * spec + self._diffuse_probability(ops, wi, q) * diff
 
     def _sample(self, ops, wi, u, q):
         ps = self._spec_probability(ops, wi, q)
