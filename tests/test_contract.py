@@ -94,6 +94,18 @@ def test_non_unit_directions_are_normalised(name, rng):
 
 
 @pytest.mark.parametrize("name", plausible.names())
+def test_directions_whose_squared_length_over_or_underflows_are_normalised(name, rng):
+    """|a|^2 of [1e200, 0, 1e200] overflows and of [1e-170, 0, 1e-170] underflows;
+    both are still the direction of [1, 0, 1] (issue 21)."""
+    m = plausible.make(name)
+    a, b = random_upper(rng, 20), random_upper(rng, 20)
+    for s, t in ((1e200, 1e-170), (1e-170, 1e300), (1e-300, 1e-300)):
+        np.testing.assert_allclose(m.eval(s * a, t * b), m.eval(a, b), rtol=1e-12)
+        np.testing.assert_allclose(m.pdf(s * a, t * b), m.pdf(a, b), rtol=1e-12)
+    np.testing.assert_allclose(m.eval([1e200, 0, 1e200], [0, 0, 1]), m.eval([1, 0, 1], [0, 0, 1]), rtol=1e-12)
+
+
+@pytest.mark.parametrize("name", plausible.names())
 def test_bad_directions_and_samples_are_refused(name):
     m = plausible.make(name)
     with pytest.raises(ValueError, match="wi must have shape"):

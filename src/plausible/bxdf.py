@@ -59,10 +59,16 @@ def _as_array(name: str, w) -> np.ndarray:
     try:
         a = np.asarray(w, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a float array of shape (..., 3)") from None
+        raise ValueError(f"{name} must be a float array of shape (..., 3), got {_short(w)}") from None
     if a.ndim == 0 or a.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3), got {a.shape}")
     return a
+
+
+def _short(v) -> str:
+    """``repr(v)``, cut to 60 characters (for error messages)."""
+    r = repr(v)
+    return r if len(r) <= 60 else r[:57] + "..."
 
 
 def _blocks(a: np.ndarray):
@@ -80,12 +86,28 @@ def _norm2(a: np.ndarray) -> np.ndarray:
     return x * x + y * y + z * z
 
 
+def _max_abs(a: np.ndarray) -> np.ndarray:
+    """The largest ``|component|`` of each row of ``a`` (shape ``(..., 3)``)."""
+    return np.maximum(np.maximum(np.abs(a[..., 0]), np.abs(a[..., 1])), np.abs(a[..., 2]))
+
+
+#: ``|a|^2`` outside ``(_SAFE_LO, _SAFE_HI)`` may have under- or overflowed: those
+#: rows are rescaled by their largest component before normalising.
+_SAFE_LO, _SAFE_HI = 1e-290, 1e290
+#: ``| |a|^2 - 1 |`` up to which a direction counts as unit (about 18 ulp; a
+#: normalised vector is within 3 ulp of it).
+UNIT_TOL = 4e-15
+
+
 def _check_block(name: str, b: np.ndarray, check_zero: bool = True):
-    s = _norm2(b)
+    with np.errstate(over="ignore", under="ignore"):
+        s = _norm2(b)
     if not np.all(np.isfinite(s)) and not np.all(np.isfinite(b)):
         raise ValueError(f"{name} must be finite (found NaN or inf)")
-    if check_zero and np.any(s == 0):
-        raise ValueError(f"{name} must be non-zero vectors (a zero vector has no direction)")
+    if check_zero:
+        z = s == 0  # |b|^2 may underflow for a tiny non-zero b (1e-170): ask its components
+        if np.any(z) and np.any(_max_abs(b[z]) == 0):
+            raise ValueError(f"{name} must be non-zero vectors (a zero vector has no direction)")
     return s
 
 
@@ -100,8 +122,24 @@ def _check_directions(name: str, a: np.ndarray) -> None:
 
 
 def _normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
-    """``a / |a|`` (``s``: ``_norm2(a)`` if already computed)."""
-    return a / np.sqrt(_norm2(a) if s is None else s)[..., None]
+    """``a / |a|`` (``s``: ``_norm2(a)`` if already computed).  Rows whose
+    ``|a|^2`` under- or overflows (components below 1e-145 or above 1e145) are
+    first divided by their largest component, so ``[1e200, 0, 1e200]`` and
+    ``[1e-170, 0, 1e-170]`` give the direction of ``[1, 0, 1]``.  Rows already
+    unit to rounding (``| |a|^2 - 1 | <= UNIT_TOL``, e.g. a sampled ``wo``) are
+    kept as given: normalising twice moves a direction by an ulp, and a density
+    that is steep there (a ``cos^n`` lobe with ``n < 1`` near its edge, a
+    direction at the horizon threshold) would then differ from the pdf that
+    ``sample`` returned for it."""
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        s = _norm2(a) if s is None else s
+        out = np.where((np.abs(s - 1.0) <= UNIT_TOL)[..., None], a, a / np.sqrt(s)[..., None])
+        bad = ~((s > _SAFE_LO) & (s < _SAFE_HI))
+        if np.any(bad):
+            b = np.broadcast_to(a, out.shape)[bad]
+            b = b / _max_abs(b)[..., None]
+            out[bad] = b / np.sqrt(_norm2(b))[..., None]
+    return out
 
 
 def _checked_unit(name: str, a: np.ndarray) -> np.ndarray:

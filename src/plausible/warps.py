@@ -8,6 +8,7 @@ the same code runs on NumPy and on Dr.Jit.
 from __future__ import annotations
 
 from . import vec
+from .bxdf import HORIZON
 from .ops import INV_PI, PI
 
 
@@ -200,6 +201,9 @@ def beckmann_half_vector(ops, ax, ay, u1, u2):
     r2 = c * c + s * s
     inv = 1.0 / ops.sqrt(r2)
     tan2 = -ops.log1p(-ops.minimum(u1, 1.0 - 2.0 ** -53)) * r2
+    # u1 = 1 (or 1 - 2^-53, which rounds to 1 in float32) gives tan^2 = inf and
+    # inf * 0 below; 1e30 is the horizon to 1e-15 (a rejected sample), finite in float32
+    tan2 = ops.minimum(tan2, 1e30)
     cos_t = 1.0 / ops.sqrt(1.0 + tan2)
     sin_t = ops.sqrt(tan2) * cos_t
     return (sin_t * c * inv, sin_t * s * inv, cos_t)
@@ -219,7 +223,9 @@ def beckmann_half_vector_pdf(ops, ax, ay, h):
     ok = hz > 0
     z = ops.where(ok, hz, 1.0)
     e = ((h[0] / ax) ** 2 + (h[1] / ay) ** 2) / (z * z)
-    return ops.where(ok, ops.exp(-e) / (PI * ax * ay * z * z * z), 0.0)
+    # exp(-e) / hz^3 as one exponential: hz^3 underflows near the horizon in float32
+    # (flushed to zero in vectorised code) where exp(-e) is zero too (0/0 otherwise)
+    return ops.where(ok, ops.exp(-e - 3.0 * ops.log(z)) / (PI * ax * ay), 0.0)
 
 
 def beckmann_reflected_pdf(ops, wi, wo, ax, ay):
@@ -234,11 +240,11 @@ def reflected_pdf(ops, wi, wo, half_vector_pdf):
     ``half_vector_pdf(h)``: ``p_h(h) / (4 (wi.h))`` with ``h`` the half vector
     of ``wi`` and ``wo`` (the change of measure ``d omega_o = 4 (wi.h) d omega_h``;
     Ashikhmin & Shirley 2000, journal eq. 8).  Zero unless ``wi.h > 0`` and both
-    directions are above the horizon.  Generic in the half-vector distribution
+    directions are above the horizon (``cos(theta) > HORIZON``, as for ``f`` and
+    for the pdf that ``sample`` returns).  Generic in the half-vector distribution
     (used by the Schlick model; :func:`reflected_half_vector_pdf` is the same
     change of measure for the Ashikhmin-Shirley distribution).
     """
-    h = vec.half_vector(ops, wi, wo)
-    kh = vec.dot(wi, h)
-    ok = (kh > 0) & (wo[2] > 0) & (wi[2] > 0)
+    h, kh = vec.half_vector_cos(ops, wi, wo)  # wi.h from |wi + wo| (exact at grazing)
+    ok = (kh > 0) & (wo[2] > HORIZON) & (wi[2] > HORIZON)
     return ops.where(ok, half_vector_pdf(h) / (4.0 * ops.where(ok, kh, 1.0)), 0.0)

@@ -72,4 +72,6 @@ def test_bad_input():
         albedo_curve(m, [0.1, 2.0])
     with pytest.raises(ValueError, match="wi"):
         albedo(m, [0, 0, 0])
+    with pytest.raises(ValueError, match="wi must be a float array.*'up'"):
+        albedo(m, "up")
     assert albedo(m, [0, 0, -1]).value == 0

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible.analysis import chi2, direction, energy, reciprocity, sampling_consistency
+from plausible.analysis import albedo, chi2, direction, energy, reciprocity, sampling_consistency
+from plausible.analysis.checks import ENERGY_THETAS
 from plausible.bxdf import Sample
 from plausible.models.phong import ReciprocalPhong, lobe_pdf, phong_sample
 
@@ -88,7 +89,11 @@ def test_energy_reports_onset_for_original_phong():
     assert not r.passed
     # albedo at theta: (1/cos theta) * reciprocal albedo; exceeds 1 beyond some angle
     assert r.details["onset_deg"] is not None and r.details["onset_deg"] > 0
-    assert r.worst["theta_i_deg"] == 89.9
+    # the grid reaches cos(theta) = 1e-9, where the albedo is a reciprocal Phong's over 1e-9
+    t = r.worst["theta_i_deg"]
+    assert t == max(ENERGY_THETAS) and math.cos(math.radians(t)) == pytest.approx(1e-9, rel=1e-6)
+    recip = albedo(plausible.make("reciprocal-phong", n=1.0, ks=1.0), direction(math.radians(t))).value
+    assert r.figure == pytest.approx(recip / math.cos(math.radians(t)), rel=1e-3)
 
 
 def test_sampling_consistency_rejects_pdf_off_by_10_percent():

@@ -188,16 +188,32 @@ def test_pumped_blinn_outshines_its_input_at_grazing_with_either_correction():
     assert peaks["controlled"] == pytest.approx(peaks["max"], rel=0.01)
 
 
+@pytest.mark.slow
 def test_pumping_makes_a_non_energy_conserving_symmetric_base_conserve_energy():
     """'Even if the original BRDF is only symmetric, but is not energy preserving,
-    the first pumping-up operation makes it energy preserving': Cook-Torrance with
-    G = 1 has albedo > 1 at grazing; pumped once, <= 1."""
-    base = "cook-torrance:m=0.3:rs=1:geometry=none"
+    the first pumping-up operation makes it energy preserving': balanced Ward
+    with rs = 1, rd = 0.3 has a bounded albedo above 1 (1.21 at normal incidence);
+    pumped once, <= 1 from the normal to cos(theta) = 1e-9 (the table takes 2 min)."""
+    base = "ward:variant=balanced:rs=1:rd=0.3:alpha_x=0.3:alpha_y=0.3"
     b = plausible.registry.make_from_spec(base)
-    assert alb(b, 89.0) > 1.2
+    assert alb(b, 0.0) > 1.2
     m = pumped(base)
-    for t in (0.0, 60.0, 85.0, 89.0):
+    for t in (0.0, 60.0, 85.0, 89.0, 89.9, math.degrees(math.acos(1e-9))):
         assert alb(m, t) <= 1.0 + 1e-4
+
+
+@pytest.mark.parametrize("base, rate", [
+    ("cook-torrance:m=0.3:rs=1:geometry=none", 1000.0),  # a ~ 1/cos (paper sec. 2.1)
+    ("ward:alpha_x=0.3:alpha_y=0.3", math.sqrt(1000.0)),  # a ~ 1/sqrt(cos)
+])
+def test_a_base_whose_albedo_diverges_at_the_horizon_is_refused(base, rate):
+    """No finite table can give g >= a (eq. 17) where a grows without bound; the
+    pumped albedo would be 10 at cos 1e-7 and 1000 at 1e-9 (issue 21).  The probes
+    grow by the divergence rate between cos 1e-6 and 1e-9."""
+    a6, a9 = pu.horizon_albedos(plausible.registry.make_from_spec(base))
+    assert a9 / a6 == pytest.approx(rate, rel=0.02)
+    with pytest.raises(ValueError, match=r"'base'.*grows without bound toward the horizon"):
+        pumped(base)
 
 
 def test_colour_base_keeps_its_hue_and_every_channel_conserves_energy():

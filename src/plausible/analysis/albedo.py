@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import backend as _backend
-from ..bxdf import BxDF
+from ..bxdf import BxDF, as_directions
 from ..progress import start
 from .quadrature import lobe_breaks, panel_rule
 
@@ -206,13 +206,10 @@ def _integrate(model, kind, wis, tol, levels):
 
 
 def _unit_incidence(wi):
-    wi = np.asarray(wi, dtype=np.float64)
+    wi = as_directions("wi", wi)  # names wi and the value in every error (a string, NaN, a zero vector)
     if wi.shape != (3,):
         raise ValueError(f"wi must be one direction of shape (3,), got {wi.shape}")
-    nrm = np.linalg.norm(wi)
-    if not np.isfinite(nrm) or nrm == 0:
-        raise ValueError(f"wi must be a finite, non-zero vector, got {wi.tolist()}")
-    return wi / nrm
+    return wi
 
 
 def _check_tol(tol):

@@ -16,8 +16,21 @@ from ..progress import start
 from ..text import jsonable
 from .albedo import albedos, direction, is_isotropic, pdf_integrals
 
-#: Incidence angles (degrees) of the default energy grid: dense toward grazing.
-ENERGY_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9)
+#: ``cos(theta)`` of the incidences between 89.9 degrees and the horizon that every
+#: energy check includes: albedos that diverge at grazing incidence (Ward 1992 as
+#: ``1/sqrt(cos)``, Cook-Torrance with ``G = 1`` as ``1/cos``, and anything built on
+#: them) stay below 1 at 89.9 degrees for smooth lobes and show only here.
+GRAZING_COS = (1e-3, 1e-5, 1e-7, 1e-9)
+
+
+def grazing_thetas(cosines=GRAZING_COS) -> tuple:
+    """Polar angles in degrees whose cosines are ``cosines`` (to 1e-7 relative)."""
+    return tuple(math.degrees(math.acos(c)) for c in cosines)
+
+
+#: Incidence angles (degrees) of the default energy grid: dense toward grazing,
+#: down to ``cos(theta) = 1e-9`` (:data:`GRAZING_COS`).
+ENERGY_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9) + grazing_thetas()
 #: Azimuths (degrees) added for anisotropic models.
 ENERGY_PHIS = (0, 22.5, 45, 67.5, 90, 135)
 
@@ -87,7 +100,8 @@ def energy_directions(model, thetas_deg=ENERGY_THETAS, phis_deg=None):
 def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
            progress=None) -> PropertyResult:
     """Max directional albedo over a grid of incidence directions (azimuths too
-    for anisotropic models); passes when ``max a <= 1 + tol``.  ``tol`` matches the
+    for anisotropic models), by default from the normal to ``cos(theta) = 1e-9``;
+    passes when ``max a <= 1 + tol``.  ``tol`` matches the
     integrator's accuracy target; each albedo's own error estimate is reported.
     ``progress``: a :mod:`plausible.progress` factory, ticked per direction."""
     dirs = energy_directions(model, thetas_deg, phis_deg)

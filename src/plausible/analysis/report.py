@@ -10,7 +10,7 @@ from .adapters import as_bxdf, tolerances
 from .albedo import direction, is_isotropic
 from ..progress import start, within
 from ..text import jsonable
-from .checks import (ENERGY_THETAS, PropertyResult, energy, energy_directions, reciprocity,
+from .checks import (ENERGY_THETAS, PropertyResult, energy, energy_directions, grazing_thetas, reciprocity,
                      sampling_consistency)
 from .chi2 import chi2
 
@@ -150,7 +150,7 @@ def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
     iso = getattr(model, "isotropic", None)
     iso = is_isotropic(model) if iso is None else iso
     chi_dirs = CHI2_DIRECTIONS if iso else CHI2_DIRECTIONS_ANISO
-    thetas = (0, 30, 60, 80, 89.9) if quick else ENERGY_THETAS
+    thetas = (0, 30, 60, 80, 89.9) + grazing_thetas((1e-5, 1e-9)) if quick else ENERGY_THETAS
     e_dirs = energy_directions(model, thetas, (0.0,) if iso else None)
     s_thetas = (0, 45, 85) if quick else (0, 30, 60, 80, 89)
     s_phis = (0,) if iso else (0, 45)

@@ -83,13 +83,14 @@ def specular(ops, wi, wo, nu, nv, rs):
     ``      = p_h(h) F(h.k) / (4 (h.k) max(n.k1, n.k2))``
 
     with ``F`` Schlick's approximation (journal eq. 3) and ``p_h`` journal eq. 6.
-    ``h.k`` is the mean of ``k1.h`` and ``k2.h`` (equal in exact arithmetic), which
-    makes the value bitwise reciprocal.  Zero unless both directions are above
-    the horizon.
+    ``h.k = |k1 + k2| / 2`` (:func:`plausible.vec.half_vector_cos`; equal to
+    ``k1.h`` and ``k2.h`` in exact arithmetic): bitwise reciprocal, accurate at
+    grazing incidence where the dot products cancel, and the same ``h.k`` as
+    the density :func:`specular_pdf`, so ``f cos / pdf`` stays bounded in
+    float32 too.  Zero unless both directions are above the horizon.
     """
     ok = above(ops, wi, wo)
-    h = vec.half_vector(ops, wi, wo)
-    kh = 0.5 * (vec.dot(wi, h) + vec.dot(wo, h))
+    h, kh = vec.half_vector_cos(ops, wi, wo)
     ok = ok & (kh > 0)
     den = 4.0 * ops.where(ok, kh * ops.maximum(wi[2], wo[2]), 1.0)
     val = half_vector_density(ops, h, nu, nv) * schlick(ops, kh, rs) / den
@@ -139,11 +140,23 @@ def specular_probability(ops, cos_i, rs, rd):
     non-zero, and the cosine-weighted diffuse sampler covers the whole
     hemisphere, so the mixture's support always contains the BRDF's.
     """
+    return lobe_probabilities(ops, cos_i, rs, rd)[0]
+
+
+def lobe_probabilities(ops, cos_i, rs, rd):
+    """``(ps, pd) = (Fs, Ad) / (Fs + Ad)``: the probabilities of the specular lobe
+    (:func:`specular_probability`) and of the diffuse one, each computed as its
+    own quotient.  ``pd`` is not ``1 - ps``: at grazing incidence ``Ad`` is
+    ``O(cos(theta))`` and ``Fs`` near 1, so ``ps`` rounds to 1 (in float32 below
+    ``cos = 1e-7``) and ``1 - ps`` to 0, and the pdf lost its diffuse part while
+    ``f`` kept it (sample weights of 6e6).  ``(1, 0)`` where ``Fs + Ad == 0``."""
     c = ops.maximum(cos_i, 0.0)
     fs = schlick(ops, c, rs)
     ad = diffuse_albedo(c, rs, rd)
     s = fs + ad
-    return ops.where(s > 0, fs / ops.where(s > 0, s, 1.0), 1.0)
+    pos = s > 0
+    inv = 1.0 / ops.where(pos, s, 1.0)
+    return ops.where(pos, fs * inv, 1.0), ops.where(pos, ad * inv, 0.0)
 
 
 def specular_pdf(ops, wi, wo, nu, nv):
@@ -185,12 +198,17 @@ class AshikhminShirley(BxDF):
         """Mixture weight of the specular lobe (override to experiment)."""
         return specular_probability(ops, wi[2], q.rs, q.rd)
 
+    def diffuse_probability(self, ops, wi, q):
+        """Mixture weight of the diffuse lobe, ``1 - spec_probability`` computed
+        without cancellation (:func:`lobe_probabilities`)."""
+        return lobe_probabilities(ops, wi[2], q.rs, q.rd)[1]
+
     def _f(self, ops, wi, wo, p):
         return specular(ops, wi, wo, p.nu, p.nv, p.rs) + diffuse(ops, wi, wo, p.rs, p.rd)
 
     def _pdf(self, ops, wi, wo, q):
-        ps = self.spec_probability(ops, wi, q)
-        return ps * specular_pdf(ops, wi, wo, q.nu, q.nv) + (1.0 - ps) * diffuse_pdf(ops, wi, wo)
+        ps, pd = self.spec_probability(ops, wi, q), self.diffuse_probability(ops, wi, q)
+        return ps * specular_pdf(ops, wi, wo, q.nu, q.nv) + pd * diffuse_pdf(ops, wi, wo)
 
     def _sample(self, ops, wi, u, q):
         ps = self.spec_probability(ops, wi, q)

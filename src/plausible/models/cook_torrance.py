@@ -33,22 +33,24 @@ GEOMETRY = ("vgroove", "none")
 
 
 def beckmann_d(ops, h, m):
-    """``exp(-tan^2(delta) / m^2) / (pi m^2 cos^4(delta))``, ``cos(delta) = hz``; zero for ``hz <= 0``."""
+    """``exp(-tan^2(delta) / m^2) / (pi m^2 cos^4(delta))``, ``cos(delta) = hz``; zero for ``hz <= 0``.
+
+    Computed as ``exp(-tan^2 / m^2 - 4 log(hz)) / (pi m^2)``: near the horizon
+    ``hz^4`` underflows (below 1e-38 in float32, where vectorised code flushes it
+    to zero) while the Gaussian is already zero, and the quotient as written
+    would be 0/0.  The exponent is finite for every ``hz > 0`` and at most
+    ``log(4) - 1``, so the value never overflows either.
+    """
     ok = h[2] > 0
     z = ops.where(ok, h[2], 1.0)
-    z2 = z * z
-    tan2 = (h[0] * h[0] + h[1] * h[1]) / z2
-    e = ops.exp(-tan2 / (m * m))
-    # where the exponential underflows, D is 0: guard the denominator too, whose
-    # square (in the derivative of the quotient) underflows in float32 (m = 1e-4, hz ~ 1e-4)
-    live = ok & (e > 0)
-    return ops.where(live, e / ops.where(live, PI * m * m * z2 * z2, 1.0), 0.0)
+    tan2 = (h[0] * h[0] + h[1] * h[1]) / (z * z)
+    return ops.where(ok, ops.exp(-tan2 / (m * m) - 4.0 * ops.log(z)) / (PI * m * m), 0.0)
 
 
-def vgroove_g(ops, wi, wo, h):
+def vgroove_g(ops, wi, wo, h, vh):
     """``min(1, 2 (N.H)(N.V) / (V.H), 2 (N.H)(N.L) / (V.H))`` (Cook & Torrance 1982;
-    pumping-up paper eq. 10).  ``V.H = L.H`` so the formula is symmetric."""
-    vh = vec.dot(wo, h)
+    pumping-up paper eq. 10).  ``V.H = L.H`` (``vh``, from
+    :func:`plausible.vec.half_vector_cos`) so the formula is symmetric."""
     ok = vh > 0
     d = ops.where(ok, vh, 1.0)
     g = ops.minimum(1.0, ops.minimum(2.0 * h[2] * wo[2] / d, 2.0 * h[2] * wi[2] / d))
@@ -81,11 +83,11 @@ class CookTorrance(BxDF):
 
     def _f(self, ops, wi, wo, p):
         ok = above(ops, wi, wo)
-        h = vec.half_vector(ops, wi, wo)
+        h, kh = vec.half_vector_cos(ops, wi, wo)
         ci = ops.where(ok, wi[2], 1.0)
         co = ops.where(ok, wo[2], 1.0)
-        g = vgroove_g(ops, wi, wo, h) if p.geometry == "vgroove" else 1.0
-        F = fresnel.weight(ops, p.fresnel, vec.dot(wi, h), p.rs, p.eta, p.k)
+        g = vgroove_g(ops, wi, wo, h, kh) if p.geometry == "vgroove" else 1.0
+        F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
         return ops.where(ok, F * beckmann_d(ops, h, p.m) * g / (4.0 * ci * co), 0.0)
 
     def _pdf(self, ops, wi, wo, q):

@@ -78,8 +78,8 @@ class NeumannMetal(BxDF):
                              f"for n = {self.params['n']:g} (energy balance, eq. 22), got {c:g}")
 
     def _fresnel(self, ops, wi, wo, p):
-        h = vec.half_vector(ops, wi, wo)
-        return fresnel.weight(ops, p.fresnel, vec.dot(wi, h), p.rs, p.eta, p.k)
+        kh = vec.half_vector_cos(ops, wi, wo)[1]
+        return fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
 
     def _f(self, ops, wi, wo, p):
         return self._fresnel(ops, wi, wo, p) * neumann_metal(ops, wi, wo, p.n, p.c)

@@ -71,8 +71,7 @@ class AshikhminShirleyDielectric(BxDF):
     )
 
     def _f(self, ops, wi, wo, p):
-        h = vec.half_vector(ops, wi, wo)
-        kh = 0.5 * (vec.dot(wi, h) + vec.dot(wo, h))
+        kh = vec.half_vector_cos(ops, wi, wo)[1]   # k.h from |k1 + k2| / 2, as in AS.specular
         return AS.specular(ops, wi, wo, p.n, p.n, 1.0) * fresnel.dielectric(ops, kh, p.eta)
 
     def _pdf(self, ops, wi, wo, q):

@@ -9,10 +9,13 @@ An operator on any reciprocal BRDF ``f`` (``neumann-neumann-szirmay-kalos-albedo
 
 Then ``a(L) <= a*(L) <= 1`` (eq. 18-19): ``a*(L) = int f / g cos <= int f / a(L) cos = 1``.
 The proof needs only ``g >= max(a(L), a(V))``; the upper bound ``g <= 1`` of
-eq. 17 is what makes the albedo grow, so a base whose albedo exceeds 1 (Ward,
-Cook-Torrance with ``G = 1`` at grazing) is made energy conserving by one
+eq. 17 is what makes the albedo grow, so a base whose albedo exceeds 1 but stays
+bounded (balanced Ward with ``rs = 1, rd = 0.3``) is made energy conserving by one
 application ("even if the original BRDF is only symmetric, but is not energy
 preserving, then the first pumping-up operation makes it energy preserving").
+A base whose albedo diverges at the horizon (Ward 1992, Dür's Ward, Cook-Torrance
+with ``G = 1``: the paper's sec. 2.1) has no finite ``g`` and is refused
+(:func:`check_bounded_albedo`).
 
 Applied ``times`` times, each level divides by the ``g`` built from the albedo of
 the level below: ``f_k = f_{k-1} / g(a_{k-1})``.  Each level's albedo is
@@ -118,6 +121,36 @@ def _source_hash(cls) -> str:
     return h.hexdigest()[:16]
 
 
+def _cached(kind: str, model, compute, wrap=lambda v: v):
+    """``wrap(values)`` of the array ``compute()`` for ``model``, cached in memory
+    (:data:`_TABLES`) and on disk as ``{kind}-{digest}.npy`` (see :func:`table_cache_dir`)."""
+    key = kind + "|" + spec_of(model) + "|" + _source_hash(type(model))
+    if key in _TABLES:
+        return _TABLES[key]
+    digest = hashlib.sha1(key.encode()).hexdigest()
+    cache = table_cache_dir()
+    path = cache / f"{kind}-{digest}.npy" if cache else None
+    out = None
+    if path is not None and path.exists():
+        try:
+            out = wrap(np.load(path))
+        except (OSError, ValueError):
+            out = None
+    if out is None:
+        values = compute()
+        out = wrap(values)
+        if path is not None:
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_suffix(f".{os.getpid()}.tmp.npy")
+                np.save(tmp, values)
+                os.replace(tmp, path)
+            except OSError:
+                pass
+    _TABLES[key] = out
+    return out
+
+
 def albedo_table_of(model, progress=None):
     """The (cached) albedo table of ``model``: memory first, then disk, else integrated
     (reported to ``progress``, a :mod:`plausible.progress` factory; with None, to the
@@ -125,30 +158,57 @@ def albedo_table_of(model, progress=None):
     from ..analysis import albedo_table
     from ..tables import AngleTable
 
-    key = spec_of(model) + "|" + _source_hash(type(model))
-    if key in _TABLES:
-        return _TABLES[key]
-    digest = hashlib.sha1(key.encode()).hexdigest()
-    cache = table_cache_dir()
-    path = cache / f"albedo-{digest}.npy" if cache else None
-    table = None
-    if path is not None and path.exists():
-        try:
-            table = AngleTable(np.load(path))
-        except (OSError, ValueError):
-            table = None
-    if table is None:
-        table = albedo_table(model, progress=progress)
-        if path is not None:
-            try:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_suffix(f".{os.getpid()}.tmp.npy")
-                np.save(tmp, table.values)
-                os.replace(tmp, path)
-            except OSError:
-                pass
-    _TABLES[key] = table
-    return table
+    return _cached("albedo", model, lambda: albedo_table(model, progress=progress).values, AngleTable)
+
+
+#: ``cos(theta)`` of the two probes of :func:`horizon_albedos`: the table's last
+#: node lies 1e-6 rad above the horizon; 1e-9 is as close as the energy check goes.
+HORIZON_COS = (1e-6, 1e-9)
+
+
+def horizon_albedos(model, progress=None) -> np.ndarray:
+    """The largest directional albedo of ``model`` over a few azimuths (one for an
+    isotropic model, four otherwise) at ``cos(theta)`` = each of :data:`HORIZON_COS`
+    (cached like the tables).  ``progress``, if given, is called with the number of
+    albedo evaluations just done."""
+    from ..analysis import albedo, is_isotropic
+
+    def compute():
+        phis = (0.0,) if is_isotropic(model) else tuple(k * np.pi / 4 for k in range(4))
+        out = []
+        for c in HORIZON_COS:
+            s = np.sqrt(1.0 - c * c)
+            out.append(max(float(np.max(albedo(model, np.array([s * np.cos(p), s * np.sin(p), c])).value))
+                           for p in phis))
+            if progress:
+                progress(len(phis))
+        return np.array(out)
+
+    return _cached("horizon", model, compute)
+
+
+def check_bounded_albedo(model, owner: str = "PumpedUp", progress=None) -> None:
+    """Raise ValueError when the albedo of ``model`` (a base) grows without bound
+    toward the horizon.
+
+    Eq. 17 needs ``g >= max(a(L), a(V))`` at every pair of directions, and eq. 18
+    (``a* <= 1``) holds only where it does.  A table holds finite values: for a
+    base whose albedo diverges at grazing incidence (Ward 1992 as ``1/sqrt(cos)``,
+    Dür's Ward and Cook-Torrance with ``G = 1`` as ``1/cos``, paper sec. 2.1) no
+    table bounds it, and the pumped albedo exceeds 1 there (10 at ``cos = 1e-7``
+    and 1000 at ``1e-9`` for Cook-Torrance with ``G = 1``, ``m = 0.3``).  The test:
+    the albedo at ``cos(theta) = 1e-9`` exceeds the one at ``1e-6`` (the table's
+    last node) by more than 0.1 % + 1e-4 (a bounded albedo changes by
+    ``O(1e-6)`` between them; the divergent ones by 3.2x and 1000x).
+    """
+    a6, a9 = horizon_albedos(model, progress)
+    if a9 > a6 * (1.0 + 1e-3) + 1e-4:
+        raise ValueError(
+            f"{owner}: parameter 'base': the albedo of {spec_of(model)} grows without bound toward the "
+            f"horizon (a = {a6:.4g} at cos(theta) = 1e-6, {a9:.4g} at 1e-9); pumping-up divides by "
+            f"g >= max(a(L), a(V)) (eq. 17), which no finite table provides, so the result would not "
+            f"conserve energy near the horizon. Use a base with a bounded albedo, e.g. "
+            f"'cook-torrance' with geometry=vgroove or 'ward' with variant=balanced.")
 
 
 def correction(ops, kind, a_l, a_v, wi, wo):
@@ -190,6 +250,7 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
+        check_bounded_albedo(base, progress=progress)
         self.tables = []
         level = base
         for t in range(1, self.params["times"] + 1):
@@ -215,8 +276,8 @@ class PumpedUp(BxDF):
         f = self.base._f(ops, wi, wo, self.base.p)
         g = self.g(ops, wi, wo)
         ok = above(ops, wi, wo) & (g > 0.0)
-        h = vec.half_vector(ops, wi, wo)
-        F = fresnel.weight(ops, p.fresnel, vec.dot(wi, h), p.rs, p.eta, p.k)
+        kh = vec.half_vector_cos(ops, wi, wo)[1]
+        F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
         return ops.where(ok, F * f / ops.where(ok, g, 1.0), 0.0)
 
     def _pdf(self, ops, wi, wo, q):

@@ -64,17 +64,26 @@ def zenith(ops, sin2_h, r):
     return r / (den * den)
 
 
+#: ``sin^2(theta_h)`` below which a half vector counts as the pole ``h = n``
+#: (see :func:`azimuth_normalised`).
+POLE_SIN2 = 1e-12
+
+
 def azimuth_normalised(ops, hx, hy, p):
     """``A(w) = p / (p^2 - p^2 w^2 + w^2)`` with ``w^2 = hx^2 / (hx^2 + hy^2)``.
 
     Computed as ``p (hx^2 + hy^2) / (hx^2 + p^2 hy^2)`` (no division by zero
-    off the pole); at the pole (``hx = hy = 0``, where ``w`` is undefined) the
-    value is 1, the mean over ``phi``.  Normalised:
-    ``(1 / 2 pi) int_0^{2 pi} A(cos phi) d phi = 1``.
+    off the pole); at the pole, where ``w`` is undefined, the value is 1, the
+    mean over ``phi``.  "The pole" is ``hx^2 + hy^2 <= POLE_SIN2`` (``theta_h``
+    below 1e-6 rad): there ``hx, hy`` of a unit half vector are rounding noise
+    (about 1e-16 in float64, 1e-7 in float32, e.g. at the exact mirror direction,
+    where the sampler and ``pdf()`` would otherwise get any ``A`` in
+    ``[p, 1/p]`` from the last bits).  The cap has solid angle ``pi 1e-12``.
+    Normalised: ``(1 / 2 pi) int_0^{2 pi} A(cos phi) d phi = 1``.
     """
     s = hx * hx + hy * hy
     den = hx * hx + p * p * hy * hy
-    pos = s > 0
+    pos = s > POLE_SIN2
     return ops.where(pos, p * s / ops.where(pos, den, 1.0), 1.0)
 
 
@@ -128,8 +137,7 @@ def sample_half_vector(ops, r, p, u1, u2):
 def schlick_specular(ops, wi, wo, r, p, rs, form):
     """``F(u) G(v) G(v') Z(t) A(w) / (4 pi v v')`` (Schlick 1994, single slope)."""
     ok = above(ops, wi, wo)
-    h = vec.half_vector(ops, wi, wo)
-    u = vec.dot(wi, h)
+    h, u = vec.half_vector_cos(ops, wi, wo)
     s = h[0] * h[0] + h[1] * h[1]
     v = ops.where(ok, wi[2], 1.0)
     vp = ops.where(ok, wo[2], 1.0)
@@ -175,11 +183,18 @@ class Schlick(BxDF):
         pos = tot > 0
         return ops.where(pos, fs / ops.where(pos, tot, 1.0), 0.5)
 
+    def _diffuse_probability(self, ops, wi, q):
+        # rd / (F + rd) as its own quotient, not 1 - ps (which rounds to 0 in float32
+        # for rd < 6e-8 while the diffuse term stays)
+        tot = fresnel.schlick(ops, wi[2], q.rs) + q.rd
+        pos = tot > 0
+        return ops.where(pos, q.rd / ops.where(pos, tot, 1.0), 0.5)
+
     def _pdf(self, ops, wi, wo, q):
         ps = self._spec_probability(ops, wi, q)
         spec = warps.reflected_pdf(ops, wi, wo, lambda h: half_vector_pdf(ops, h, q.r, q.p))
         diff = ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
-        return ps * spec + (1.0 - ps) * diff
+        return ps * spec + self._diffuse_probability(ops, wi, q) * diff
 
     def _sample(self, ops, wi, u, q):
         ps = self._spec_probability(ops, wi, q)

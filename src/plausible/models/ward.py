@@ -37,11 +37,16 @@ from ..registry import register
 VARIANTS = ("ward", "duer", "balanced")
 
 
+def ward_exponent(ops, h, ax, ay):
+    """``((hx/ax)^2 + (hy/ay)^2) / hz^2`` for ``hz > 0`` (the Gaussian's exponent,
+    Ward 1992 eq. 5a, ``tan^2(theta_h) (cos^2 phi_h / ax^2 + sin^2 phi_h / ay^2)``)."""
+    z = ops.where(h[2] > 0, h[2], 1.0)
+    return ((h[0] / ax) ** 2 + (h[1] / ay) ** 2) / (z * z)
+
+
 def ward_gaussian(ops, h, ax, ay):
     """``exp(-((hx/ax)^2 + (hy/ay)^2) / hz^2)`` (Ward 1992 eq. 5a), zero for ``hz <= 0``."""
-    ok = h[2] > 0
-    z = ops.where(ok, h[2], 1.0)
-    return ops.where(ok, ops.exp(-((h[0] / ax) ** 2 + (h[1] / ay) ** 2) / (z * z)), 0.0)
+    return ops.where(h[2] > 0, ops.exp(-ward_exponent(ops, h, ax, ay)), 0.0)
 
 
 def ward_specular(ops, wi, wo, ax, ay, variant):
@@ -49,18 +54,18 @@ def ward_specular(ops, wi, wo, ax, ay, variant):
     ok = above(ops, wi, wo)
     ci = ops.where(ok, wi[2], 1.0)
     co = ops.where(ok, wo[2], 1.0)
-    h = vec.half_vector(ops, wi, wo)
-    e = ward_gaussian(ops, h, ax, ay)
+    h, kh = vec.half_vector_cos(ops, wi, wo)
     if variant == "ward":
-        val = e / (4.0 * PI * ax * ay * ops.sqrt(ci * co))
+        val = ward_gaussian(ops, h, ax, ay) / (4.0 * PI * ax * ay * ops.sqrt(ci * co))
     elif variant == "duer":
-        val = e / (4.0 * PI * ax * ay * ci * co)
+        val = ward_gaussian(ops, h, ax, ay) / (4.0 * PI * ax * ay * ci * co)
     elif variant == "balanced":
-        kh = vec.dot(wi, h)
-        hz = h[2]
-        d = kh * kh * hz * hz * hz * hz
-        good = ok & (d > 0)
-        val = ops.where(good, e / (4.0 * PI * ax * ay * ops.where(good, d, 1.0)), 0.0)
+        # E / ((wi.h)^2 hz^4) as one exponential: (wi.h)^2 hz^4 underflows near the
+        # horizon in float32 (flushed to zero in vectorised code) where E is zero (0/0)
+        good = ok & (kh > 0) & (h[2] > 0)
+        kz = ops.where(good, kh * h[2] * h[2], 1.0)
+        val = ops.where(good, ops.exp(-ward_exponent(ops, h, ax, ay) - 2.0 * ops.log(kz))
+                        / (4.0 * PI * ax * ay), 0.0)
     else:
         raise ValueError(f"Ward: parameter 'variant' must be one of {VARIANTS}, got {variant!r}")
     return ops.where(ok, val, 0.0)
