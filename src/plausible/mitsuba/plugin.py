@@ -189,6 +189,7 @@ class ParamState:
             else:
                 self.arrays[name], self.flags[name] = t
         self.templates = dict(values)
+        self.exact = {n: (values[n], np.array(a)) for n, a in self.arrays.items()}
         self.q_opaque = ()
         self.build()
         # sampling constants that may change (traversed) and that the sampler takes as arrays
@@ -213,18 +214,26 @@ class ParamState:
         return known
 
     def values(self) -> dict:
-        """The current Python value of every non-texture parameter."""
+        """The current Python value of every non-texture parameter: the value last
+        accepted while its traversed array still holds it (so a float64 value the
+        scene gave is not rounded to the array's float32, which could push a
+        constraint such as ``kd + ks <= 1`` over its bound), else the array's."""
         out = dict(self.fixed)
         for name, a in self.arrays.items():
             prm = self.info.param(name)
-            out[name] = prm.validate(untraverse(prm, a, self.templates[name]), self.plugin)
+            value, image = self.exact.get(name, (None, None))
+            if image is not None and np.array_equal(np.asarray(a), image):
+                out[name] = value
+            else:
+                out[name] = prm.validate(untraverse(prm, a, self.templates[name]), self.plugin)
         return out
 
     def build(self):
         """Build the NumPy model from the current values (every range and
         constraint checked by the model), the textures' pointwise constraints,
         and what the hooks need (``q``, flags)."""
-        consts = {k: v for k, v in self.values().items() if v is not None}
+        vals = self.values()
+        consts = {k: v for k, v in vals.items() if v is not None}
         for name, tex in self.textures.items():
             prm = self.info.param(name)
             mean = float(np.mean(np.asarray(tex.mean())))
@@ -237,6 +246,7 @@ class ParamState:
             P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
         self.model = model
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
+        self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
         self._set_sampling()
         self.m_flags, self.sampled_type = bsdf_flags(
             self.mi, model, self.info, any(t.is_spatially_varying() for t in self.textures.values()))
