@@ -173,6 +173,8 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
         return as_target(registry.make_from_spec(str(target)), thetas_deg=thetas_deg)
     if hasattr(target, "eval") and hasattr(target, "peak_directions"):
         wi, wo = M.sample_pairs(target.peak_directions, thetas_deg=thetas_deg)
+        if hasattr(target, "measured_pairs"):   # a table (MERL): compare where it was measured
+            wi, wo = target.measured_pairs(wi, wo)
         f = target.eval(wi, wo)
         mask = None
         if hasattr(target, "missing"):

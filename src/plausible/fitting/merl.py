@@ -161,6 +161,25 @@ class MerlBRDF(BxDF):
     def _sample(self, ops, wi, u, q):
         return warps.cosine_hemisphere(ops, u[1], u[2])
 
+    def measured_pairs(self, wi, wo):
+        """The direction pairs at the centres of the cells that the pairs ``wi``,
+        ``wo`` fall in, each cell once (in order of first occurrence), with
+        ``phi_h = 0``: where the table was measured.  A fit compares a model with
+        the table there, not at arbitrary pairs, a sixth of which (those of
+        :func:`plausible.fitting.metrics.sample_pairs`, at whole degrees) lie on
+        cell edges, where the nearest-cell value is decided by the last bit."""
+        from ..bxdf import as_directions, split
+        from ..ops import NP
+
+        a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))
+        with np.errstate(all="ignore"):
+            idx = self._index(NP, a, b).astype(np.int64)
+        cells = idx[np.sort(np.unique(idx, return_index=True)[1])]
+        ih, rest = np.divmod(cells, RES[1] * RES[2])
+        id_, ip = np.divmod(rest, RES[2])
+        return from_half_diff(((ih + 0.5) / RES[0]) ** 2 * HALF_PI, (id_ + 0.5) / RES[1] * HALF_PI,
+                              (ip + 0.5) / RES[2] * math.pi)
+
     def missing(self, wi, wo) -> np.ndarray:
         """Boolean mask: the pair falls in a cell without a measurement."""
         from ..bxdf import as_directions, split
