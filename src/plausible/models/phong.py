@@ -79,8 +79,11 @@ def blinn_norm(ops, n):
 
 
 def lobe_pdf(ops, wi, wo, n):
-    """Density of :func:`phong_sample`: ``(n + 1) / (2 pi) cos^n(alpha)`` on ``wo.z > 0``."""
-    return ops.where(above(ops, wi, wo), warps.power_cosine_lobe_pdf(ops, n, phong_cos(wi, wo)), 0.0)
+    """Density of :func:`phong_sample`: ``(n + 1) / (2 pi) cos^n(alpha)`` on ``wo.z > 0``,
+    with ``cos^n`` from :func:`phong_lobe`, the arithmetic of ``f``: a power of the
+    dot product instead would differ from ``f``'s lobe by ``n`` float32 roundings
+    (1-4 % of the sample weight at exponents of 10^5, found by the plugin fuzzer)."""
+    return ops.where(above(ops, wi, wo), (n + 1.0) / (2.0 * PI) * phong_lobe(ops, wi, wo, n), 0.0)
 
 
 def phong_sample(ops, wi, n, u1, u2):
