@@ -52,40 +52,25 @@ def create_app() -> FastAPI:
             raise ValueError(f"theta_i must lie in [0, 90] degrees, got {t}")
         return t
 
-    @app.post("/api/validate")
-    async def validate(request: Request):
-        m, _ = await model_of(request)
-        return {"ok": True, "model": repr(m)}
+    # the JSON views: route name -> the view of (model, request body); requests run one at a
+    # time on the event loop (the computations share Dr.Jit's state, which is not for threads)
+    routes = {
+        "validate": lambda m, b: {"ok": True, "model": repr(m)},
+        "plane": lambda m, b: views.plane(m, _theta(b)),
+        "lobe3d": lambda m, b: views.lobe3d(m, _theta(b)),
+        "slice": lambda m, b: views.half_diff_slice(m),
+        "albedo": lambda m, b: views.albedo(m),
+        "check": lambda m, b: views.verdict(m),
+        "shader": lambda m, b: views.shader(m, prefix=str(b.get("prefix", "m0"))),
+    }
 
-    @app.post("/api/plane")
-    async def plane(request: Request):
-        m, body = await model_of(request)
-        return views.plane(m, _theta(body))
+    def route(view):
+        async def answer(request: Request):
+            return view(*await model_of(request))
+        return answer
 
-    @app.post("/api/lobe3d")
-    async def lobe3d(request: Request):
-        m, body = await model_of(request)
-        return views.lobe3d(m, _theta(body))
-
-    @app.post("/api/slice")
-    async def slice_(request: Request):
-        m, _ = await model_of(request)
-        return views.half_diff_slice(m)
-
-    @app.post("/api/albedo")
-    async def albedo(request: Request):
-        m, _ = await model_of(request)
-        return views.albedo(m)
-
-    @app.post("/api/check")
-    async def check(request: Request):
-        m, _ = await model_of(request)
-        return views.verdict(m)
-
-    @app.post("/api/shader")
-    async def shader(request: Request):
-        m, body = await model_of(request)
-        return views.shader(m, prefix=str(body.get("prefix", "m0")))
+    for name, view in routes.items():
+        app.post(f"/api/{name}", name=name)(route(view))
 
     @app.post("/api/export")
     async def export(request: Request):
