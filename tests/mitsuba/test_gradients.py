@@ -80,18 +80,17 @@ def finite_difference(params, key, x, h, loss):
 
 def ad_derivatives(params, key, x, loss):
     """(forward, reverse) derivative of ``loss`` in ``params[key]`` at ``x``."""
-    v = mi.Float(x)
-    dr.enable_grad(v)
-    params[key] = v
-    params.update()
-    out = loss()
+    def traced():      # a fresh input with gradients on, and the loss computed from it
+        v = mi.Float(x)
+        dr.enable_grad(v)
+        params[key] = v
+        params.update()
+        return v, loss()
+
+    v, out = traced()
     dr.forward(v, flags=ALLOW)
     fwd = float(dr.grad(out)[0])
-    v = mi.Float(x)
-    dr.enable_grad(v)
-    params[key] = v
-    params.update()
-    out = loss()
+    v, out = traced()
     dr.backward(out, flags=ALLOW)
     rev = float(dr.grad(v)[0])
     params[key] = mi.Float(x)

@@ -52,10 +52,10 @@ def _bounds(p, value=None):
 
 def _jsonable_value(v):
     from ..bxdf import BxDF
-    from ..mitsuba.scene_dict import spec_string
+    from ..registry import spec_of
 
     if isinstance(v, BxDF):
-        return "[" + spec_string(v) + "]"
+        return "[" + spec_of(v) + "]"
     if isinstance(v, np.ndarray):
         return v.tolist()
     if isinstance(v, (list, tuple)):
@@ -237,7 +237,8 @@ FORMATS = {"spec": (".txt", "text/plain"), "mitsuba-dict": (".json", "applicatio
 
 def export(model, fmt: str) -> tuple[str, str]:
     """``(file name, text)`` of ``model`` in format ``fmt`` (:data:`FORMATS`)."""
-    from ..mitsuba.scene_dict import spec_string, to_dict, to_xml
+    from ..mitsuba.scene_dict import to_dict, to_xml
+    from ..registry import spec_of
 
     if fmt not in FORMATS:
         raise ValueError(f"export format must be one of {', '.join(FORMATS)}, got {fmt!r}")
@@ -245,7 +246,7 @@ def export(model, fmt: str) -> tuple[str, str]:
     if model.info is None and "@" in stem:        # a published material (plausible.material)
         return _export_material(model, fmt)
     if fmt == "spec":
-        text = spec_string(model) + "\n"
+        text = spec_of(model) + "\n"
     elif fmt == "mitsuba-dict":
         text = json.dumps(to_dict(model), indent=2) + "\n"
     elif fmt == "mitsuba-xml":

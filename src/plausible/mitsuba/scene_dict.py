@@ -26,17 +26,11 @@ def plugin_name(model: BxDF) -> str:
     raise ValueError(f"{model.name!r} has no Mitsuba plugin (is it a registered model?)")
 
 
-def spec_string(model: BxDF) -> str:
-    """``name:k=v:...`` that :func:`plausible.registry.make_from_spec` rebuilds the
-    model from (:func:`plausible.registry.spec_of`)."""
-    from ..registry import spec_of
-
-    return spec_of(model)
-
-
 def _value(p, v):
     if isinstance(v, BxDF):
-        return spec_string(v)
+        from ..registry import spec_of
+
+        return spec_of(v)
     if p.kind == "color":
         arr = np.atleast_1d(np.asarray(v, dtype=np.float64))
         if arr.size == 1:
@@ -79,4 +73,4 @@ def to_xml(model: BxDF, id: str | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["plugin_name", "spec_string", "to_dict", "to_xml"]
+__all__ = ["plugin_name", "to_dict", "to_xml"]
