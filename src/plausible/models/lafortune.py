@@ -62,7 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -200,6 +200,28 @@ def lobe_pdf(ops, d, wo, n):
     return warps.power_cosine_lobe_pdf(ops, n, vec.dot(d, wo))
 
 
+def _lobe_f(k):
+    """``f`` of the ``k``-th (normalised) lobe alone."""
+    return lambda ops, wi, wo, p: ops.where(above(ops, wi, wo),
+                                            lobe_value(ops, wi, wo, normalised_lobes(p.lobes)[k]), 0.0)
+
+
+def _lobe_pdf(k):
+    def pdf(ops, wi, wo, q):
+        lobe = normalised_lobes(q.lobes)[k]
+        d = lobe_axis_and_estimate(ops, wi, lobe)[0]
+        return ops.where(above(ops, wi, wo), lobe_pdf(ops, d, wo, lobe[3]), 0.0)
+    return pdf
+
+
+def _lobe_sample(k):
+    def sample(ops, wi, u, q):
+        lobe = normalised_lobes(q.lobes)[k]
+        d = lobe_axis_and_estimate(ops, wi, lobe)[0]
+        return warps.power_cosine_lobe_about(ops, d, lobe[3], u[1], u[2])
+    return sample
+
+
 @register("lafortune",
           "Lafortune et al. 1997 generalized cosine lobes: f = rd/pi + sum rho (cx Lx Vx + "
           "cy Ly Vy + cz Lz Vz)^n; energy bound rd + sum rho cmax^n 2pi/(n+2) <= 1 enforced.",
@@ -238,37 +260,29 @@ class Lafortune(BxDF):
     def _f(self, ops, wi, wo, p):
         return lafortune(ops, wi, wo, p.rd, normalised_lobes(p.lobes))
 
-    def _weights(self, ops, wi, q):
-        """Axes and unnormalised mixture weights (diffuse first)."""
-        axes, est = [], []
-        for lobe in normalised_lobes(q.lobes):
-            d, e = lobe_axis_and_estimate(ops, wi, lobe)
-            axes.append((d, lobe[3]))
-            est.append(e)
-        total = q.rd
-        for e in est:
-            total = total + e
-        return axes, est, total
+    def lobes(self):
+        """The Lambertian term (albedo ``rd``), then each generalized cosine lobe
+        (normalised, :func:`normalised_lobes`), sampled as a ``cos^n`` lobe about
+        its axis ``C wi / |C wi|``."""
+        out = [Lobe("diffuse", lambda ops, wi, wo, p: ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0),
+                    lambda ops, wi, wo, q: ops.where(above(ops, wi, wo),
+                                                     warps.cosine_hemisphere_pdf(ops, wo), 0.0),
+                    lambda ops, wi, u, q: warps.cosine_hemisphere(ops, u[1], u[2]),
+                    lambda ops, wi, p: p.rd)]
+        for k in range(len(normalised_lobes(self.params["lobes"]))):
+            out.append(Lobe("glossy", _lobe_f(k), _lobe_pdf(k), _lobe_sample(k)))
+        return tuple(out)
+
+    def lobe_weights(self, ops, wi, q):
+        """``rd`` and each lobe's albedo estimate (:func:`lobe_axis_and_estimate`)."""
+        return (q.rd,) + tuple(lobe_axis_and_estimate(ops, wi, lobe)[1]
+                               for lobe in normalised_lobes(q.lobes))
 
     def _pdf(self, ops, wi, wo, q):
-        axes, est, total = self._weights(ops, wi, q)
-        val = q.rd * warps.cosine_hemisphere_pdf(ops, wo)
-        for (d, n), e in zip(axes, est):
-            val = val + e * lobe_pdf(ops, d, wo, n)
-        pos = total > 0
-        return ops.where(above(ops, wi, wo) & pos, val / ops.where(pos, total, 1.0), 0.0)
+        return mixture_pdf(ops, self, wi, wo, q)
 
     def _sample(self, ops, wi, u, q):
-        axes, est, total = self._weights(ops, wi, q)
-        t = u[0] * total
-        out = warps.cosine_hemisphere(ops, u[1], u[2])
-        start = q.rd
-        for (d, n), e in zip(axes, est):
-            lobe = warps.power_cosine_lobe_about(ops, d, n, u[1], u[2])
-            # Component k covers t in [start_k, start_k + E_k); a later match wins.
-            out = warps.mixture(ops, (t >= start) & (e > 0), lobe, out)
-            start = start + e
-        return out
+        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi: np.ndarray) -> list:
         """Each lobe's axis ``C wi / |C wi|`` (moved just above the horizon when it
