@@ -209,7 +209,9 @@ def test_brdf_files_agree_with_numpy_through_the_explorer_signature(browser):
     to_world = lambda w: (w.astype(np.float64) @ frame).astype(np.float32)  # noqa: E731
     lw, vw = to_world(wi), to_world(wo)
     browser.set_inputs([lw, vw])
-    models = [plausible.make(nm) for nm in plausible.names()] + [plausible.make("modified-phong", n=1e4)]
+    models = [plausible.make(nm) for nm in plausible.names()] + [plausible.make("modified-phong", n=1e4)] + [
+        plausible.make(nm, fresnel="conductor", eta=[0.2, 0.9, 1.1], k=[3.9, 2.4, 2.2])   # eta_r, k_g, ... sliders
+        for nm in ("cook-torrance", "neumann-metal")]
     res = browser.run([brdf_job(to_brdf(m), x, y, n) for m in models])
     refs = []
     for m in models:
@@ -233,3 +235,21 @@ def test_two_prefixed_exports_in_one_shader_agree_with_numpy(browser, pairs):
     got = browser.run([((code, f"outColor = vec4({p}_f(a.xyz, b.xyz), 1.0);"), uni) for p in ("as", "laf")])
     refs = [reference_f(m, wi, wo) for m in (m_as, m_laf)]
     assert worst(["as", "laf"], got, refs) == []
+
+
+def test_a_resampled_table_in_a_brdf_file_stays_within_its_stated_error(browser):
+    """A .brdf file whose albedo table was resampled (here the 93 values of the
+    default pumped-up to at most 20) against NumPy with the full table: its
+    error exceeds the float32 criterion (a different table) but stays within
+    the interpolation error the file states (g = max(a(L), a(V)) divides f)."""
+    import re
+
+    m = plausible.make("pumped-up")
+    text = to_brdf(m, table_limit=20)
+    stated = float(re.search(r"interpolation error at most ([0-9.e+-]+)", text).group(1))
+    wi, wo = direction_pairs(seed=5)
+    x, y, n = (np.eye(3, dtype=np.float32)[k] for k in range(3))
+    browser.set_inputs([wi, wo])
+    got, = browser.run([brdf_job(text, x, y, n)])
+    err = relative_errors(got[:, :3], reference_f(m, wi, wo)).max()
+    assert RTOL < err <= stated + RTOL

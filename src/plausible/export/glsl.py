@@ -26,6 +26,7 @@ models' hooks, traced once.  What it guarantees:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -159,6 +160,27 @@ def helpers(used: set, guards: bool = True) -> str:
     return "\n".join(out)
 
 
+#: Widest table texture (WebGL2 guarantees 2048 texels a side).
+MAX_TEXTURE_WIDTH = 1024
+
+
+def texture_width(n: int) -> int:
+    """Width of the texture holding a table of ``n`` values (row by row)."""
+    return min(n, MAX_TEXTURE_WIDTH)
+
+
+@dataclass(frozen=True)
+class TableTexture:
+    """A table as a texture: ``width x height`` single-channel float32 texels
+    (``R32F``; read with ``texelFetch``, no filtering), ``data`` row by row, the
+    last row padded with zeros; ``name`` is its ``sampler2D`` uniform."""
+
+    name: str
+    width: int
+    height: int
+    data: np.ndarray
+
+
 class Emitter:
     """Prints graphs as GLSL statements, one temporary per distinct node.
 
@@ -169,9 +191,12 @@ class Emitter:
     use accumulate in :attr:`used` and :attr:`tables`.
     """
 
-    def __init__(self, prefix: str, names):
+    def __init__(self, prefix: str, names, tables: str = "const"):
+        if tables not in ("const", "texture"):
+            raise ValueError(f"tables must be 'const' or 'texture', got {tables!r}")
         self.prefix = prefix
         self.names = names
+        self.table_kind = tables
         self.used: set = set()
         self.tables: dict = {}  # id(Table) -> (name, Table)
 
@@ -181,12 +206,37 @@ class Emitter:
         return self.tables[id(tab)][0]
 
     def table_declarations(self) -> str:
+        """The tables: ``const`` arrays, or (``tables="texture"``) a ``sampler2D``
+        uniform and its reader ``<name>_at(i)`` each (:meth:`textures` holds the texels)."""
         out = []
         for name, tab in self.tables.values():
             n = len(tab.values)
-            vals = ", ".join(literal(v) for v in tab.values)
-            out.append(f"const {P} float {name}[{n}] = float[{n}]({vals});")
+            if self.table_kind == "const":
+                vals = ", ".join(literal(v) for v in tab.values)
+                out.append(f"const {P} float {name}[{n}] = float[{n}]({vals});")
+                continue
+            w = texture_width(n)
+            out.append(f"""uniform {P} sampler2D {name};  // {n} values in a {w} x {-(-n // w)} R32F texture, row by row
+{P} float {name}_at({P} float i)
+{{
+    {P} int k = int(i);
+    return texelFetch({name}, ivec2(k % {w}, k / {w}), 0).r;
+}}""")
         return "\n".join(out)
+
+    def textures(self) -> list:
+        """``TableTexture`` s of the tables (``tables="texture"``), else ``[]``."""
+        if self.table_kind != "texture":
+            return []
+        out = []
+        for name, tab in self.tables.values():
+            n = len(tab.values)
+            w = texture_width(n)
+            h = -(-n // w)
+            data = np.zeros(w * h, dtype=np.float32)
+            data[:n] = tab.values
+            out.append(TableTexture(name, w, h, data))
+        return out
 
     def statements(self, roots):
         """GLSL statements computing ``roots`` (nodes or numbers) and the text of each root."""
@@ -270,6 +320,8 @@ class Emitter:
             self.used.add("atan2")
             return f"{h}_atan2({a[0]}, {a[1]})"
         if op == "gather":
+            if self.table_kind == "texture":
+                return f"{self.table_name(e.value)}_at({a[0]})"
             return f"{self.table_name(e.value)}[int({a[0]})]"
         raise ValueError(f"GLSL export: no translation of the operation {op!r}")
 
