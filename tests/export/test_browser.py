@@ -218,3 +218,18 @@ def test_brdf_files_agree_with_numpy_through_the_explorer_signature(browser):
         r = m._eval_block(li, vi, (len(li),))
         refs.append(np.broadcast_to(r[:, None] if r.ndim == 1 else r, (len(li), 3)))
     assert worst([m.name for m in models], res, refs) == []
+
+
+def test_two_prefixed_exports_in_one_shader_agree_with_numpy(browser, pairs):
+    """Ashikhmin-Shirley (uniforms, prefix 'as') and Lafortune (baked, prefix 'laf')
+    in one fragment shader, sharing the guarded helpers: each equals NumPy."""
+    wi, wo = pairs
+    m_as = plausible.make("ashikhmin-shirley", nu=20.0, nv=400.0)
+    m_laf = plausible.make("lafortune", lobes=[(-1, -1, 1, 1e3, 50.0), (0.5, 0.5, 1.0, 8.0, 0.2)], rd=0.1)
+    a, b = to_glsl(m_as, uniforms=True, prefix="as"), to_glsl(m_laf, prefix="laf")
+    code = a.text + b.text
+    uni = {u.name: list(u.value) for u in a.uniforms}
+    browser.set_inputs([wi, wo])
+    got = browser.run([((code, f"outColor = vec4({p}_f(a.xyz, b.xyz), 1.0);"), uni) for p in ("as", "laf")])
+    refs = [reference_f(m, wi, wo) for m in (m_as, m_laf)]
+    assert worst(["as", "laf"], got, refs) == []

@@ -28,6 +28,7 @@ function of the base) becomes a ``const float`` array in the shader.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
@@ -38,9 +39,9 @@ from .. import symbolic
 from ..bxdf import BxDF
 from ..text import fmt
 from ..symbolic import SYM
-from .glsl import Emitter, channels3, helpers, literal
+from .glsl import P, Emitter, channels3, helpers, literal
 
-__all__ = ["GLSLShader", "Uniform", "to_glsl", "to_brdf", "uniform_params", "write"]
+__all__ = ["GLSLShader", "Uniform", "check_prefix", "to_glsl", "to_brdf", "uniform_params", "write"]
 
 #: Parameter kinds that can be uniforms (others change the formula's structure).
 UNIFORM_KINDS = ("scalar", "color")
@@ -60,7 +61,7 @@ class Uniform:
     param: object
 
     def declaration(self) -> str:
-        return f"uniform {self.type} {self.name};"
+        return f"uniform {P} {self.type} {self.name};"
 
 
 @dataclass
@@ -68,10 +69,13 @@ class GLSLShader:
     """The exported functions of one model, in parts a host shader can assemble.
 
     ``uniforms`` (declarations via :meth:`declarations`), ``tables`` (``const``
-    arrays), ``helpers`` (the guarded ``pow``/``log1p``/``atan2``), ``functions``
+    arrays), ``helpers`` (``plausible_pow``, ``plausible_log1p``, ... each in an
+    ``#ifndef`` guard; ``helper_names`` the ones used), ``functions``
     (``<prefix>_f`` and, if ``sampling``, ``<prefix>_pdf``, ``<prefix>_sample``);
     ``str(shader)`` is all of it in that order, with a header comment.  No
-    ``#version``, no ``precision`` line and no ``main``: those are the host's.
+    ``#version``, no ``precision`` line and no ``main``: those are the host's;
+    every float declared is ``highp`` (the formulas need float32 whatever the
+    host's default precision).
     """
 
     model: str
@@ -82,6 +86,7 @@ class GLSLShader:
     functions: str
     sampling: bool
     baked: dict = field(default_factory=dict)
+    helper_names: frozenset = frozenset()
 
     def declarations(self) -> str:
         return "\n".join(u.declaration() for u in self.uniforms)
@@ -115,6 +120,17 @@ def uniform_params(model, uniforms=True) -> list:
         raise ValueError(f"{model.name}: cannot make {', '.join(map(repr, bad))} a uniform; "
                          f"parameters that can be uniforms: {', '.join(ok) or 'none'}")
     return [ok[n] for n in names]
+
+
+def check_prefix(prefix: str, what: str = "prefix") -> str:
+    """``prefix`` if it can begin GLSL names (a letter, then letters, digits and
+    single underscores; not ``gl_``: GLSL reserves ``gl_`` and ``__``), else
+    ValueError naming ``what``."""
+    if not (isinstance(prefix, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", prefix)
+            and "__" not in prefix + "_" and not prefix.startswith("gl_")):
+        raise ValueError(f"{what} must be a GLSL name: a letter, then letters, digits and single "
+                         f"underscores, not ending in '_' nor beginning with 'gl_' (e.g. 'ward'), got {prefix!r}")
+    return prefix
 
 
 def _symbolic_params(model, specs):
@@ -158,8 +174,10 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         ``vec3`` for a colour); a list: only those.  A Python ``if`` of a hook
         on a uniform parameter is exported as both branches joined by ``?:``.
     prefix : str
-        Prefix of every global name (functions, helpers, tables, uniforms), so
-        several models can share one shader.
+        Prefix of the model's global names (functions, tables, uniforms), so
+        several models can share one shader; the helpers keep the names
+        ``plausible_pow`` etc. in every export, each guarded by ``#ifndef``
+        (:func:`plausible.export.glsl.helpers`), and so are defined once.
     sampling : bool
         Also export ``<prefix>_pdf`` and ``<prefix>_sample`` (if the model samples).
     names : callable, optional
@@ -170,6 +188,7 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
     GLSLShader
         ``str(shader)`` is a self-contained GLSL ES 3.00 snippet.
     """
+    check_prefix(prefix)
     specs = uniform_params(model, uniforms)
     name_of = names or (lambda n: f"{prefix}_{n}")
     for s in specs:
@@ -193,15 +212,15 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
     f = channels3(_trace(model, model._f, wi, wo, p))
     roots = list(f)
     # wi, wo are unit vectors (the contract's front end normalises; a shader's caller does)
-    funcs = [em.function(f"vec3 {prefix}_f(vec3 wi, vec3 wo)", f, "vec3({0}, {1}, {2})")]
+    funcs = [em.function(f"{P} vec3 {prefix}_f({P} vec3 wi, {P} vec3 wo)", f, "vec3({0}, {1}, {2})")]
     do_sampling = sampling and _has_sampling(model)
     if do_sampling:
         pdf = _trace(model, model._pdf, wi, wo, q)
         roots.append(pdf)
-        funcs.append(em.function(f"float {prefix}_pdf(vec3 wi, vec3 wo)", [pdf], "{0}"))
+        funcs.append(em.function(f"{P} float {prefix}_pdf({P} vec3 wi, {P} vec3 wo)", [pdf], "{0}"))
         wo_s = _trace(model, model._sample, wi, symbolic.direction("u"), q)
         roots.extend(wo_s)
-        funcs.append(em.function(f"vec3 {prefix}_sample_direction(vec3 wi, vec3 u)", list(wo_s),
+        funcs.append(em.function(f"{P} vec3 {prefix}_sample_direction({P} vec3 wi, {P} vec3 u)", list(wo_s),
                                  "vec3({0}, {1}, {2})"))
         funcs.append(_sample_front_end(prefix))
     # a parameter the traced functions never read (eta and k without fresnel='conductor')
@@ -218,19 +237,19 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
     uni = {s.name for s in specs}
     baked = {k: fmt(v, other=repr) for k, v in model.params.items() if k not in uni}
     return GLSLShader(model=repr(model), prefix=prefix, uniforms=values, tables=em.table_declarations(),
-                      helpers=helpers(prefix, em.used), functions="\n".join(funcs),
-                      sampling=do_sampling, baked=baked)
+                      helpers=helpers(em.used), functions="\n".join(funcs),
+                      sampling=do_sampling, baked=baked, helper_names=frozenset(em.used))
 
 
 def _sample_front_end(prefix: str) -> str:
     """The contract's ``sample`` (:meth:`plausible.bxdf.BxDF.sample`) around the
     traced direction: normalise ``wo``, its pdf, ``weight = f cos / pdf``, zero
     below the horizon."""
-    return f"""vec3 {prefix}_sample(vec3 wi, vec3 u, out vec3 weight, out float pdf)
+    return f"""{P} vec3 {prefix}_sample({P} vec3 wi, {P} vec3 u, out {P} vec3 weight, out {P} float pdf)
 {{
     // wi a unit vector; u in [0, 1)^3: u.x picks a lobe, u.yz drive the warp (plausible.bxdf.BxDF.sample)
-    vec3 wo = {prefix}_sample_direction(wi, u);
-    float len = length(wo);
+    {P} vec3 wo = {prefix}_sample_direction(wi, u);
+    {P} float len = length(wo);
     wo = len > 0.0 ? wo / len : vec3(0.0, 0.0, -1.0);
     pdf = {prefix}_pdf(wi, wo);
     bool ok = pdf > 0.0 && wo.z > {literal(1e-12)} && wi.z > {literal(1e-12)};
@@ -278,7 +297,7 @@ def to_brdf(model) -> str:
         else:
             lo, hi = _slider(u.param, u.value[0])
             params.append(f"float {u.name} {_num(lo)} {_num(hi)} {_num(u.value[0])}")
-    f_end = shader.functions.index(f"float {shader.prefix}_pdf") if shader.sampling else None
+    f_end = shader.functions.index(f"{P} float {shader.prefix}_pdf(") if shader.sampling else None
     f_part = shader.functions[:f_end] if f_end is not None else shader.functions
     wrapper = """vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
 {
@@ -291,7 +310,8 @@ def to_brdf(model) -> str:
              "# Lines beginning with '#' are comments for the BRDF Explorer loader.",
              *(["# baked in: " + ", ".join(f"{k}={v}" for k, v in shader.baked.items())] if shader.baked else []),
              "", "::begin parameters", *params, "::end parameters", "",
-             "::begin shader", *_code_lines("\n\n".join(x for x in (shader.tables, shader.helpers, f_part, wrapper)
+             "::begin shader", *_code_lines("\n\n".join(x for x in (shader.tables, helpers(shader.helper_names, guards=False),
+                                                                  f_part, wrapper)
                                                        if x.strip())),
              "::end shader"]
     if shader.sampling:
@@ -316,10 +336,11 @@ def _code_lines(code: str) -> list:
     return out
 
 
-def write(model, fmt: str, path, uniforms=False) -> str:
-    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path``; returns the text."""
+def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> str:
+    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path``; returns the text.
+    ``prefix``: of the GLSL names (:func:`to_glsl`; a ``.brdf`` file holds one model)."""
     if fmt == "glsl":
-        text = to_glsl(model, uniforms=uniforms).text
+        text = to_glsl(model, uniforms=uniforms, prefix=prefix).text
     elif fmt == "brdf":
         text = to_brdf(model)
     else:
