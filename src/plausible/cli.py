@@ -533,13 +533,20 @@ def figures(out, only, spp, resolution, quick, force, list_only):
               help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="File to write.")
 @click.option("--uniforms", is_flag=True, help="glsl: parameters as uniforms instead of constants.")
-def export_cmd(model, params, fmt, out, uniforms):
+@click.option("--prefix", default="plausible", show_default=True, metavar="NAME",
+              help="glsl: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
+                   "several exports share one shader.")
+def export_cmd(model, params, fmt, out, uniforms, prefix):
     """Export MODEL as a shader (see docs/export.md)."""
-    from .export import write
+    from .export import check_prefix, write
 
+    try:
+        check_prefix(prefix, "--prefix")
+    except ValueError as e:
+        _fail(str(e))
     m = _model(model, params)
     try:
-        write(m, fmt, out, uniforms=uniforms)
+        write(m, fmt, out, uniforms=uniforms, prefix=prefix)
     except ValueError as e:
         _fail(str(e))
     except OSError as e:

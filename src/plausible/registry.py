@@ -85,7 +85,10 @@ def parse_assignments(items) -> dict:
         if not k.strip():
             raise ValueError(f"parameter assignment {it!r} has no name before '=' (write name=value, "
                              f"e.g. n=20)")
-        out[k.strip()] = parse_value(v)
+        try:
+            out[k.strip()] = parse_value(v)
+        except ValueError as e:
+            raise ValueError(f"parameter '{k.strip()}': {e}") from None
     return out
 
 

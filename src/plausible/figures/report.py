@@ -201,8 +201,20 @@ _JS = """<script>
 
 
 def _cell(x):
-    """A measurement's number (or text) in a table cell."""
+    """A measurement's number (a boolean as yes / no) in a table cell."""
+    if isinstance(x, bool):
+        return "yes" if x else "no"
     return "" if x is None else html.escape(fmt(x, ".6g"))
+
+
+def _expected(x) -> str:
+    """The "expected" cell: the value, or the bounds ``>= a`` / ``<= b``."""
+    bounds = [f"&ge; {_cell(x['at_least'])}" if x.get("at_least") is not None else "",
+              f"&le; {_cell(x['at_most'])}" if x.get("at_most") is not None else ""]
+    bounds = [b for b in bounds if b]
+    if bounds:
+        return ", ".join(bounds)
+    return _cell(x.get("expected"))
 
 
 def write_index(out: Path, figs: dict) -> Path:
@@ -247,7 +259,7 @@ def write_index(out: Path, figs: dict) -> Path:
                 cls = "" if ok is None else ("ok" if ok else "bad")
                 verdict = "" if ok is None else ("holds" if ok else "DOES NOT HOLD")
                 parts.append(f"<tr><td>{e(x['quantity'])}</td><td>{_cell(x['measured'])}</td>"
-                             f"<td>{_cell(x['expected'])}</td><td>{_cell(x['tol'])}</td>"
+                             f"<td>{_expected(x)}</td><td>{_cell(x['tol'])}</td>"
                              f"<td class='{cls}'>{verdict}</td><td>{e(x.get('note', ''))}</td></tr>")
             parts.append("</table>")
         for t in m.get("notes", []):
