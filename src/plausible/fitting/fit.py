@@ -316,6 +316,14 @@ class FitResult:
                 "evaluations": self.evaluations, "timed_out": self.timed_out, "seconds": self.seconds,
                 "unconstrained": [list(g) for g in self.unconstrained]}
 
+    def _repr_html_(self) -> str:
+        from ..text import html_table
+
+        rows = [(k, fmt(v, ".5g")) for k, v in self.params.items()]
+        rows += [(f"error: {k}", "n/a" if v is None else f"{v:.4g}") for k, v in self.errors.items()]
+        rows += [("unconstrained", "; ".join(", ".join(g) for g in self.unconstrained))] if self.unconstrained else []
+        return html_table(f"{self.model.name} fitted to {self.target.label} ({self.metric})", ["", "value"], rows)
+
     def summary(self) -> str:
         ps = ", ".join(f"{k}={fmt(v, '.5g', sep=',')}" for k, v in self.params.items())
         es = ", ".join(f"{k}={v:.4g}" for k, v in self.errors.items() if v is not None)
