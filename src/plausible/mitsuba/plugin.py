@@ -5,10 +5,16 @@ factory :func:`make_plugin_class`; what its methods do is written as functions
 of this module and of :mod:`plausible.mitsuba.props`, which can be read and
 tested alone:
 
-* :func:`bsdf_flags` -- Mitsuba's flags from what the model declares
-  (:attr:`plausible.bxdf.BxDF.LOBES`), the isotropy probe
+* :func:`bsdf_flags` -- Mitsuba's flags and components from what the model
+  declares (its lobes, :meth:`plausible.bxdf.BxDF.components`, one component
+  each; else :attr:`plausible.bxdf.BxDF.LOBES`), the isotropy probe
   :func:`plausible.analysis.is_isotropic`, the textures and the registry's
   ``reciprocal``;
+* the plugin's ``eval``, ``pdf`` and ``sample`` compose the lobes that the
+  ``BSDFContext`` enables (:func:`plausible.bxdf.mixture_f`, ``mixture_pdf``,
+  ``mixture_sample``); ``eval_diffuse_reflectance`` sums the diffuse lobes'
+  albedos; in polarized variants every value is a depolarizer;
+* :func:`mitsuba_progress` -- long computations at load reported in Mitsuba's log;
 * :func:`array_safe` -- can the model's sampler take a per-point value of a
   parameter (a dry run);
 * :func:`traversable` -- how each parameter appears in ``mi.traverse``
