@@ -504,7 +504,7 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
         def eval(self, ctx, si, wo, active=True):
             enabled = self._enabled(ctx)
             if not any(enabled):
-                return self._spectrum(mi.Float(0.0))
+                return self._spectrum(dr.zeros(mi.Float, dr.width(wo)))
             ok = active & (si.wi.z > 0) & (wo.z > 0)
             return self._spectrum(dr.select(ok, self._value(ctx, si, self._split(wo), enabled), 0.0))
 
@@ -515,7 +515,7 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
         def pdf(self, ctx, si, wo, active=True):
             enabled = self._enabled(ctx)
             if not any(enabled):
-                return mi.Float(0.0)
+                return dr.zeros(mi.Float, dr.width(wo))
             ok = active & (si.wi.z > 0) & (wo.z > 0)
             return dr.select(ok, self._pdf(ctx, si, self._split(wo), self.state.q(si), enabled), 0.0)
 
@@ -527,7 +527,7 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
             enabled = self._enabled(ctx)
             bs = dr.zeros(mi.BSDFSample3f)
             if not any(enabled):
-                return bs, self._spectrum(mi.Float(0.0))
+                return bs, self._spectrum(dr.zeros(mi.Float, dr.width(sample1)))
             q = self.state.q(si)
             wi_c = self._split(si.wi)
             wo_c, k = mixture_sample(ops, self.model, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q, enabled,
