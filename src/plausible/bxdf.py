@@ -570,10 +570,24 @@ def mixture_f(ops, model, wi, wo, p, enabled=None, components=False):
     """The sum of the enabled lobes' ``f`` (0 where none is enabled).  ``components``:
     over :meth:`BxDF.components` instead of :meth:`BxDF.lobes`."""
     lobes = _lobes_of(model, components)[0]
-    total = 0.0
-    for lobe, on in zip(lobes, _switched_on(enabled, len(lobes))):
-        if on:
-            total = total + lobe.f(ops, wi, wo, p)
+    return add_values([lobe.f(ops, wi, wo, p) for lobe, on in zip(lobes, _switched_on(enabled, len(lobes)))
+                       if on])
+
+
+def add_values(values):
+    """The sum of model values, each a number, an array or a tuple of channel
+    components (a model may return its colour as a tuple, e.g. a MERL table);
+    0.0 for none."""
+    if not values:
+        return 0.0
+    total = values[0]
+    for v in values[1:]:
+        if isinstance(total, tuple) or isinstance(v, tuple):
+            a = total if isinstance(total, tuple) else (total,) * len(v)
+            b = v if isinstance(v, tuple) else (v,) * len(a)
+            total = tuple(x + y for x, y in zip(a, b))
+        else:
+            total = total + v
     return total
 
 
@@ -626,4 +640,4 @@ def warps_mixture(ops, choose_a, a, b):
 
 
 __all__ = ["BxDF", "Lobe", "Params", "Sample", "Param", "above", "as_directions", "vec",
-           "mixture_probabilities", "mixture_f", "mixture_pdf", "mixture_sample"]
+           "mixture_probabilities", "mixture_f", "mixture_pdf", "mixture_sample", "add_values"]

@@ -39,7 +39,7 @@ import numpy as np
 
 from .. import progress, registry, vec
 from ..analysis import is_isotropic
-from ..bxdf import mixture_f, mixture_pdf, mixture_sample
+from ..bxdf import add_values, mixture_f, mixture_pdf, mixture_sample
 from . import props as P
 
 
@@ -561,9 +561,7 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
                 return self.eval(mi.BSDFContext(), si, n, active) * dr.pi
             p = self.state.p(si)
             wi_c = self._split(si.wi)
-            total = 0.0
-            for a in albedos:
-                total = total + a(ops, wi_c, p)
+            total = add_values([a(ops, wi_c, p) for a in albedos])
             value = mi.UnpolarizedSpectrum(*total) if isinstance(total, tuple) else mi.UnpolarizedSpectrum(total)
             return self._spectrum(dr.select(active & (si.wi.z > 0), value, 0.0))
 
