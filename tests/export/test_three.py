@@ -30,7 +30,8 @@ import plausible
 from plausible.export import to_js
 
 pytest.importorskip("playwright.sync_api")
-from glsl_webgl import CHROMIUM_ARGS, chromium  # noqa: E402
+from glsl_cases import RTOL, direction_pairs, relative_errors  # noqa: E402
+from glsl_webgl import CHROMIUM_ARGS, WIDTH, chromium  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "examples" / "three" / "index.html"
@@ -68,7 +69,9 @@ def page():
         url = r.request.url
         if url == ORIGIN + "index.html":
             return r.fulfill(body=PAGE.read_text(), content_type="text/html")
-        if url == ORIGIN + "brdf.js":
+        if url == ORIGIN + "webgl2.html":
+            return r.fulfill(body=webgl2_page(), content_type="text/html")
+        if url.split("?")[0] == ORIGIN + "brdf.js":
             return r.fulfill(body=state["module"], content_type="text/javascript")
         if url.startswith(cdn_prefix()):
             path = THREE / url[len(cdn_prefix()):]
@@ -205,3 +208,93 @@ def test_the_comparison_sees_an_unset_uniform_and_a_turned_frame(page):
     m = plausible.make("ashikhmin-shirley", nu=20.0, nv=400.0)
     got, r = render(page, to_js(m))
     assert agree(got, m, r)[0] and not agree(got, m, r, swap_xy=True)[0]
+
+
+# -- the plain WebGL2 function of docs/export.md ---------------------------------------
+
+DOCS = ROOT / "docs" / "export.md"
+
+
+def docs_function() -> str:
+    """The ``plausibleProgram`` block of docs/export.md, as written there."""
+    blocks = re.findall(r"^```js\n(.*?)^```", DOCS.read_text(), flags=re.S | re.M)
+    found = [b for b in blocks if "function plausibleProgram(" in b]
+    assert len(found) == 1, "docs/export.md: one js block defines plausibleProgram"
+    return found[0]
+
+
+def webgl2_page() -> str:
+    return """<!doctype html><html><body><script>
+%s
+function b64f(s) { const b = atob(s); const u = new Uint8Array(b.length);
+  for (let i = 0; i < b.length; i++) u[i] = b.charCodeAt(i); return new Float32Array(u.buffer); }
+function f64b(a) { const u = new Uint8Array(a.buffer); let s = '';
+  for (let i = 0; i < u.length; i += 8192) s += String.fromCharCode.apply(null, u.subarray(i, i + 8192));
+  return btoa(s); }
+window.runPairs = async function (url, wi, wo, w, h) {
+  const brdf = await import(url);
+  const gl = document.createElement('canvas').getContext('webgl2');
+  gl.getExtension('EXT_color_buffer_float');
+  const VS = `#version 300 es
+void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }`;
+  const MAIN = `
+uniform highp sampler2D inWi;
+uniform highp sampler2D inWo;
+out vec4 outColor;
+void main() {
+  ivec2 ij = ivec2(gl_FragCoord.xy);
+  outColor = vec4(${brdf.functions.f}(texelFetch(inWi, ij, 0).xyz, texelFetch(inWo, ij, 0).xyz), 1.0);
+}`;
+  const { program, unit } = plausibleProgram(gl, brdf, VS, MAIN);
+  [['inWi', wi], ['inWo', wo]].forEach(([name, data], k) => {
+    gl.activeTexture(gl.TEXTURE0 + unit + k);
+    gl.bindTexture(gl.TEXTURE_2D, gl.createTexture());
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, w, h, 0, gl.RGBA, gl.FLOAT, b64f(data));
+    gl.uniform1i(gl.getUniformLocation(program, name), unit + k);
+  });
+  const fb = gl.createFramebuffer();
+  gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+  gl.activeTexture(gl.TEXTURE0 + unit + 2);
+  const target = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_2D, target);
+  gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, w, h, 0, gl.RGBA, gl.FLOAT, null);
+  gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
+  gl.viewport(0, 0, w, h);
+  gl.drawArrays(gl.TRIANGLES, 0, 3);
+  const px = new Float32Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, px);
+  return f64b(px);
+};
+</script></body></html>""" % docs_function()
+
+
+def _b64(a):
+    full = np.zeros((len(a), 4), dtype=np.float32)
+    full[:, :3] = a
+    return base64.b64encode(full.tobytes()).decode()
+
+
+def test_the_docs_plain_webgl2_function_sets_every_uniform_and_table(page):
+    """``plausibleProgram`` of docs/export.md, as written, with the modules of
+    pumped-up (its table a texture; a colour uniform) and Modified Phong (three
+    uniforms), on the 4096 direction pairs of the other browser tests: NumPy's f
+    within RTOL; the same pairs with a pumped-up of another base differ (the
+    check can fail)."""
+    wi, wo = direction_pairs()
+    models = [plausible.make("pumped-up", rs=[0.9, 0.7, 0.5]), plausible.make("modified-phong", n=200.0, ks=0.3),
+              plausible.make("pumped-up", base="reciprocal-phong:ks=1:n=60")]
+    page.goto(ORIGIN + "webgl2.html")
+    got = []
+    for k, m in enumerate(models[:2]):
+        page.state["module"] = to_js(m)
+        data = page.evaluate("([u, a, b, w, h]) => runPairs(u, a, b, w, h)",
+                             [f"{ORIGIN}brdf.js?{k}", _b64(wi), _b64(wo), WIDTH, len(wi) // WIDTH])
+        got.append(np.frombuffer(base64.b64decode(data), dtype=np.float32).reshape(-1, 4)[:, :3])
+    assert page.errors == []
+    ref = lambda m: np.broadcast_to(m._eval_block(wi.astype(float), wo.astype(float), (len(wi),)).reshape(  # noqa: E731
+        len(wi), -1), (len(wi), 3))
+    assert [relative_errors(g, ref(m)).max() <= RTOL for g, m in zip(got, models)] == [True, True]
+    assert relative_errors(got[0], ref(models[2])).max() > 10 * RTOL
