@@ -460,6 +460,13 @@ class BxDF:
         args = ", ".join(f"{k}={fmt(v, other=repr)}" for k, v in self.params.items())
         return f"{type(self).__name__}({args})"
 
+    def _repr_html_(self) -> str:
+        """The model in a notebook: its name and parameters as a table."""
+        from .text import html_table
+
+        return html_table(f"{self.name} ({type(self).__name__})", ["parameter", "value"],
+                          [(k, fmt(v, other=str)) for k, v in self.params.items()])
+
 
 #: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).
 #: Models that divide by ``cos(theta)`` (original Phong/Blinn, Ward, Cook-Torrance

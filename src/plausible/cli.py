@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 
 import click
 import numpy as np
@@ -335,15 +336,17 @@ def _fmt_alb(v, e):
 @click.option("--seed", default=0, show_default=True, help="Seed of the random starts.")
 def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
-    from .fitting import fit as run_fit
+    from .fitting import UnconstrainedWarning, fit as run_fit
     from .fitting.plots import write_plots
     from .plotting import check_writable_dir
 
     try:
         if out:     # before the fit: a folder that cannot be written fails now, not after it
             check_writable_dir(out, "--out", create=True)
-        res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
-                      seed=seed, time_limit=time_limit, progress=_bar())
+        with warnings.catch_warnings(record=True) as caught:     # printed below, as the command's own line
+            warnings.simplefilter("always", UnconstrainedWarning)
+            res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
+                          seed=seed, time_limit=time_limit, progress=_bar())
     except ValueError as e:
         _fail(str(e))
     console.print(f"[bold]{escape(res.model.name)}[/bold] fitted to {escape(res.target.label)} ({metric}, "
@@ -360,6 +363,11 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     console.print(e)
     if res.timed_out:
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
+    for w in caught:
+        if issubclass(w.category, UnconstrainedWarning):
+            console.print(f"[yellow]warning:[/yellow] {escape(str(w.message))}", soft_wrap=True)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if out:
         for p in write_plots(res, out):
             console.print(f"wrote {escape(str(p))}")
