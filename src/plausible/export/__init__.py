@@ -491,15 +491,9 @@ FORMATS = ("glsl", "brdf", "js")
 
 
 def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> str:
-<<<<<<< HEAD
-    """Export ``model`` as ``fmt`` (``"glsl"``, ``"brdf"`` or ``"js"``) into ``path``;
-    returns the text.  ``prefix``: of the GLSL names (:func:`to_glsl`,
-    :func:`to_js`; a ``.brdf`` file holds one model)."""
-=======
-    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path`` (None:
-    no file); returns the text.  ``prefix``: of the GLSL names (:func:`to_glsl`;
-    a ``.brdf`` file holds one model)."""
->>>>>>> main
+    """Export ``model`` as ``fmt`` (``"glsl"``, ``"brdf"`` or ``"js"``) into ``path``
+    (None: no file); returns the text.  ``prefix``: of the GLSL names
+    (:func:`to_glsl`, :func:`to_js`; a ``.brdf`` file holds one model)."""
     if fmt == "glsl":
         text = to_glsl(model, uniforms=uniforms, prefix=prefix).text
     elif fmt == "brdf":
@@ -507,12 +501,7 @@ def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> s
     elif fmt == "js":
         text = to_js(model, prefix=prefix)
     else:
-<<<<<<< HEAD
         raise ValueError(f"export format must be one of {', '.join(map(repr, FORMATS))}, got {fmt!r}")
-    Path(path).write_text(text)
-=======
-        raise ValueError(f"export format must be 'glsl' or 'brdf', got {fmt!r}")
     if path is not None:
         Path(path).write_text(text)
->>>>>>> main
     return text
