@@ -60,7 +60,11 @@ def test_exported_shader_lists_the_values_the_model_uses():
 
 def test_parameters_survive_pickling_and_json():
     m = plausible.make("modified-phong", kd=[0.1, 0.2, 0.3])
-    assert np.array_equal(pickle.loads(pickle.dumps(m)).params["kd"], [0.1, 0.2, 0.3])
+    back = pickle.loads(pickle.dumps(m))
+    assert np.array_equal(back.params["kd"], [0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match="read-only"):
+        back.params["kd"][0] = 0.9                  # still read-only (and so the p the formulas read)
+    assert back.p.kd is back.params["kd"]
     assert plausible.text.jsonable(m.params) == {"kd": [0.1, 0.2, 0.3], "ks": 0.2, "n": 30.0}
 
 
