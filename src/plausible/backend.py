@@ -66,6 +66,11 @@ _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", d
 _TRACED: set = set()
 #: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
 _NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
+#: Structure keys (:func:`plausible.kernel_params.structure`) whose hooks failed
+#: with their parameters as kernel data: they run with constants from then on.
+_CONSTANTS: set = set()
+#: Whether the Dr.Jit call in progress passes parameters as data (set by :func:`run`).
+_AS_DATA: contextvars.ContextVar = contextvars.ContextVar("plausible_params_as_data", default=True)
 
 
 def _checked(name, source: str) -> str:
@@ -135,31 +140,100 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
                              f"its LLVM backend is not available; install the 'render' extra "
                              f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
         return "drjit"
-    if model is not None and (kernel, type(model), repr(model)) not in _TRACED:
+    key = None if model is None else (kernel, kernel_key(model))
+    if key is not None and key not in _TRACED:
         min_rows = max(min_rows, AUTO_MIN_NEW)
     if rows >= min_rows and drjit_available():
-        if model is not None:
-            _TRACED.add((kernel, type(model), repr(model)))
+        if key is not None:
+            _TRACED.add(key)
         return "drjit"
     return "numpy"
 
 
-def run(model, kind: str, numpy_fn, drjit_fn):
-    """``drjit_fn()``; if the model's hooks fail on Dr.Jit arrays, remember the model
-    as NumPy-only and return ``numpy_fn()``."""
+def structure_of(model):
+    """:func:`plausible.kernel_params.structure` of ``model``; None for an object
+    that is not a model of this library (it has no ``_structure``)."""
+    fn = getattr(model, "_structure", None)
+    if fn is None:
+        return None
     try:
-        return drjit_fn()
-    except _NotJit:
-        pass
-    except (TypeError, AttributeError, ValueError, RuntimeError, IndexError):
-        # a hook that calls NumPy on Dr.Jit arrays, or uses Python ``if`` on them
-        pass
+        return fn()
+    except Exception:  # noqa: BLE001 - a model whose parameters do not describe it: no shared kernel
+        return None
+
+
+def kernel_key(model):
+    """What the compiled kernels of ``model`` depend on: its structure when its
+    parameters enter as data, else its class and every parameter value."""
+    st = structure_of(model)
+    if st is not None and st not in _CONSTANTS:
+        return ("data", st)
+    return ("constants", type(model), repr(model))
+
+
+def run(model, kind: str, numpy_fn, drjit_fn):
+    """``drjit_fn()`` with the parameters as kernel data; if the hooks fail that
+    way, again with them as constants (and the structure is remembered: it runs
+    with constants from then on); if they fail on Dr.Jit arrays at all, remember
+    the model as NumPy-only and return ``numpy_fn()``."""
+    st = structure_of(model)
+    for data in ((True, False) if st is not None and st not in _CONSTANTS else (False,)):
+        token = _AS_DATA.set(data)
+        try:
+            return drjit_fn()
+        except _NotJit:
+            pass
+        except (TypeError, AttributeError, ValueError, RuntimeError, IndexError):
+            # a hook that calls NumPy or ``math`` on Dr.Jit arrays, or ``float()`` of one
+            pass
+        finally:
+            _AS_DATA.reset(token)
+        if data:
+            _CONSTANTS.add(st)
     _NUMPY_ONLY.add(model)
     return numpy_fn()
 
 
 class _NotJit(Exception):
     """A hook returned something that is not a Dr.Jit array or a number."""
+
+
+@contextlib.contextmanager
+def kernel_log():
+    """Count the Dr.Jit kernels launched inside the block (Dr.Jit's kernel
+    history).  Yields a dict filled on exit: ``launched`` (traced kernels run),
+    ``compiled`` (neither in Dr.Jit's in-memory cache nor on disk: LLVM
+    compiled them), ``loaded`` (from the on-disk cache), ``seconds`` (their
+    compile or load time).  Kernels from other threads in that time count too.
+
+    >>> from plausible import backend
+    >>> import plausible
+    >>> m = plausible.make("ward", alpha_x=0.2)
+    >>> _ = m.eval([0, 0, 1], [[0.6, 0, 0.8]], backend="drjit")
+    >>> with backend.kernel_log() as log:
+    ...     _ = plausible.make("ward", alpha_x=0.3).eval([0, 0, 1], [[0.6, 0, 0.8]], backend="drjit")
+    >>> log["compiled"], log["loaded"]
+    (0, 0)
+    """
+    import drjit as dr
+
+    out = dict(launched=0, compiled=0, loaded=0, seconds=0.0)
+    was = dr.flag(dr.JitFlag.KernelHistory)
+    dr.kernel_history()          # drop what came before
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        yield out
+    finally:
+        hist = dr.kernel_history()
+        dr.set_flag(dr.JitFlag.KernelHistory, was)
+        for e in hist:
+            if e.get("type") != dr.KernelType.JIT:
+                continue
+            out["launched"] += 1
+            # a kernel loaded from disk reads cache_hit 1 and cache_disk 1
+            if e.get("cache_disk") or not e.get("cache_hit"):
+                out["loaded" if e.get("cache_disk") else "compiled"] += 1
+                out["seconds"] += (e.get("codegen_time", 0.0) + e.get("backend_time", 0.0)) * 1e-3
 
 
 # -- Dr.Jit evaluation of the hooks ------------------------------------------------------
@@ -201,16 +275,10 @@ class _Lanes:
             return x
         return self.dr.gather(self.Float64, x, self.row)
 
-    def params(self, p):
-        """``p`` with each channel array read per lane (channels as lanes)."""
-        if self.reps == 1:
-            return p
-        vals = {}
-        for k, v in vars(p).items():
-            if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == self.reps:
-                v = self.dr.gather(self.Float64, self.Float64(v.astype(np.float64)), self.chan)
-            vals[k] = v
-        return type(p)(**vals)
+    def view(self, model):
+        """``model`` with its parameters as this block's kernel inputs (see
+        :func:`kernel_view`)."""
+        return kernel_view(model, self.dr, self.Float64, self.chan, self.reps)
 
     def numpy(self, x, lanes: int) -> np.ndarray:
         """A hook's result as a NumPy array of ``lanes`` values."""
@@ -224,6 +292,25 @@ class _Lanes:
         if a.size != lanes:
             raise _NotJit(f"{a.size} values for {lanes} lanes")
         return a
+
+
+def kernel_view(model, dr, F, chan, reps: int):
+    """The copy of ``model`` the Dr.Jit hooks run on (:meth:`plausible.bxdf.BxDF._kernel_view`):
+    a channel array of ``reps`` values is read per lane (lane channel ``chan``), and
+    with parameters as data (:mod:`plausible.kernel_params`; see :func:`run`) a float
+    becomes an opaque kernel input and any other float array a kernel input array."""
+    data = _AS_DATA.get()
+
+    def convert(v):
+        if isinstance(v, np.ndarray):
+            if reps > 1 and v.size == reps:
+                return dr.gather(F, F(np.ascontiguousarray(v, dtype=np.float64).ravel()), chan)
+            if data and v.size == 1:
+                return dr.opaque(F, float(v.reshape(-1)[0]))
+            return v
+        return dr.opaque(F, float(v)) if data else v
+
+    return model._kernel_view(convert)
 
 
 def _is_jit(x) -> bool:
@@ -245,7 +332,8 @@ def eval_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarra
     n = int(np.prod(shape))
     c = model.channels or 1
     L = _Lanes(n, c)
-    f = model._f(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), L.params(model.p))
+    v = L.view(model)
+    f = v._f(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), v.p)
     out = L.numpy(f, n * c)
     return out.reshape(shape + ((model.channels,) if model.channels else ()))
 
@@ -254,7 +342,8 @@ def pdf_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarray
     """``model._pdf`` on Dr.Jit (as :func:`eval_block`; no channel axis)."""
     n = int(np.prod(shape))
     L = _Lanes(n)
-    v = model._pdf(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), model.q)
+    m = L.view(model)
+    v = m._pdf(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), m.q)
     return L.numpy(v, n).reshape(shape)
 
 
@@ -268,7 +357,8 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
     dr, ops = L.dr, L.ops
     wi_c = L.vectors(_rows(wi, shape))
     u_c = L.vectors(_rows(u, shape))
-    wo_c = model._sample(ops, wi_c, u_c, model.q)
+    mv = L.view(model)
+    wo_c = mv._sample(ops, wi_c, u_c, mv.q)
     wo_c = tuple(x if _is_jit(x) else L.Float64(float(x)) for x in wo_c)
     if not all(_is_jit(x) for x in wo_c):
         raise _NotJit("sample")
@@ -278,7 +368,7 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
     den = dr.select(pos, nrm, 1.0)
     x, y, z = (dr.select(pos, x / den, 0.0), dr.select(pos, y / den, 0.0), dr.select(pos, z / den, -1.0))
     wo_c = (x, y, z)
-    pdf = model._pdf(ops, wi_c, wo_c, model.q)
+    pdf = mv._pdf(ops, wi_c, wo_c, mv.q)
     ok = (pdf > 1e-250) & (z > horizon) & (wi_c[2] > horizon)
     cos_over_pdf = dr.select(ok, z / dr.select(ok, pdf, 1.0), 0.0)
     pdf = dr.select(ok, pdf, 0.0)
@@ -288,12 +378,13 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
         C = _Lanes(n, c)
         wo_l = tuple(C.gather_rows(v) for v in (x, y, z))
         wi_l = C.vectors(_rows(wi, shape))
-        f = model._f(ops, wi_l, wo_l, C.params(model.p))
+        cv = C.view(model)
+        f = cv._f(ops, wi_l, wo_l, cv.p)
         r = C.gather_rows(cos_over_pdf)
-        okc = C.gather_rows(dr.select(ok, 1.0, 0.0)) > 0.5
+        okc = C.gather_rows(dr.select(ok, L.Float64(1.0), L.Float64(0.0))) > 0.5
         weight = L.numpy(dr.select(okc, f * r, 0.0), n * c).reshape(shape + (c,))
     else:
-        f = model._f(ops, wi_c, wo_c, model.p)
+        f = mv._f(ops, wi_c, wo_c, mv.p)
         weight = L.numpy(dr.select(ok, f * cos_over_pdf, 0.0), n).reshape(shape)
     wo = np.stack([L.numpy(v, n) for v in wo_c], axis=-1).reshape(shape + (3,))
     return wo, weight, L.numpy(pdf, n).reshape(shape)
@@ -360,24 +451,21 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     cc = dr.opaque(U, c)
 
     def table(x):
-        return F(np.ascontiguousarray(x, dtype=np.float64).ravel())
+        # a single value as an opaque scalar: a one-element array made from NumPy
+        # memory enters the kernel with the alignment of its address, which varies,
+        # and so would the kernel (two variants to compile)
+        a = np.ascontiguousarray(x, dtype=np.float64).ravel()
+        return dr.opaque(F, float(a[0])) if a.size == 1 else F(a)
 
     st, ct, wt = (dr.gather(F, table(x), ti) for x in (np.sin(theta), np.cos(theta), theta_w))
     cp, sp, wp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi), phi_w))
     wo = (st * cp, st * sp, ct)
     wi = tuple(dr.gather(F, table(wis[:, k]), a) for k in range(3))
+    mv = kernel_view(model, dr, F, chan, c)
     if kind == "f":
-        p = model.p
-        if model.channels:
-            vals = {}
-            for k, v in vars(p).items():
-                if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == c:
-                    v = dr.gather(F, table(v), chan)
-                vals[k] = v
-            p = type(p)(**vals)
-        g = model._f(ops, wi, wo, p) * ct
+        g = mv._f(ops, wi, wo, mv.p) * ct
     else:
-        g = model._pdf(ops, wi, wo, model.q)
+        g = mv._pdf(ops, wi, wo, mv.q)
     if not (_is_jit(g) or isinstance(g, (int, float))):
         raise _NotJit(type(g).__name__)
     v = F(g) * (wt * wp)
@@ -391,4 +479,4 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
 
 
 __all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available",
-           "grid_sums", "requested", "use"]
+           "grid_sums", "kernel_key", "kernel_log", "kernel_view", "requested", "run", "structure_of", "use"]
