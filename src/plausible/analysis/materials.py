@@ -6,7 +6,7 @@ measures
 * reciprocity: :func:`plausible.analysis.reciprocity` of the whole model (the
   largest relative asymmetry ``|f(a,b) - f(b,a)| / max|f|`` over pairs of
   stratified directions);
-* energy: the directional albedo ``a(theta_i)`` on the grid :data:`THETAS`,
+* energy: the directional albedo ``a(theta_i)`` on the grid :data:`THETAS_DEG`,
   its largest value over angles and RGB channels, and where it occurs.
 
 The albedo of a :class:`~plausible.models.sum.Sum` is the sum of its parts'
@@ -38,7 +38,8 @@ from .checks import reciprocity
 
 #: Incidence angles (degrees) of the albedo grid: dense toward grazing, where
 #: Ward's and Cook-Torrance's albedos grow.
-THETAS = (0.0, 30.0, 60.0, 75.0, 85.0, 88.0, 89.5, 89.9)
+THETAS_DEG = (0.0, 30.0, 60.0, 75.0, 85.0, 88.0, 89.5, 89.9)
+THETAS = THETAS_DEG        # the name before the unit rule (degrees are named _deg)
 #: An albedo above ``1 + TOL`` gains energy (the integrator's accuracy is ~2e-5).
 TOL = 1e-4
 #: Reciprocity verdict: relative asymmetry at most this.
@@ -55,10 +56,10 @@ class FitCheck:
     """One row: ``material`` in fit set ``fit``.
 
     ``asymmetry`` the largest relative asymmetry (reciprocity); ``max_albedo`` the
-    largest directional albedo over :data:`THETAS` and channels, at ``theta_deg``
+    largest directional albedo over :data:`THETAS_DEG` and channels, at ``theta_deg``
     in channel ``channel``; ``albedo_normal`` the largest channel at normal
     incidence; ``error`` the integrator's error estimate of ``max_albedo``;
-    ``curve`` the largest channel's albedo at each angle of ``thetas``."""
+    ``curve`` the largest channel's albedo at each angle of ``thetas_deg`` (degrees)."""
 
     material: str
     fit: str
@@ -68,7 +69,7 @@ class FitCheck:
     channel: str
     albedo_normal: float
     error: float
-    thetas: tuple
+    thetas_deg: tuple
     curve: tuple
 
     @property
@@ -85,15 +86,15 @@ class FitCheck:
         return d
 
 
-def albedo_curve_of_sum(model, thetas=THETAS, tol: float = ALBEDO_TOL):
-    """``(values, errors)`` of shape ``(len(thetas), channels)``: the directional
+def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG, tol: float = ALBEDO_TOL):
+    """``(values, errors)`` of shape ``(len(thetas_deg), channels)``: the directional
     albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``,
     each part's albedos at every angle refined together
     (:func:`~plausible.analysis.albedo.albedos`) to the error bound ``tol``."""
     ch = model.channels or 1
-    vals = np.zeros((len(thetas), ch))
-    errs = np.zeros((len(thetas), ch))
-    wis = [direction(math.radians(t), 0.0) for t in thetas]
+    vals = np.zeros((len(thetas_deg), ch))
+    errs = np.zeros((len(thetas_deg), ch))
+    wis = [direction(math.radians(t), 0.0) for t in thetas_deg]
     for part, scale in zip(model.parts, model.scales):
         s = np.ones(ch) if scale is None else np.broadcast_to(np.asarray(scale, dtype=np.float64), (ch,))
         for i, r in enumerate(albedos(part, wis, tol=tol)):
@@ -104,12 +105,12 @@ def albedo_curve_of_sum(model, thetas=THETAS, tol: float = ALBEDO_TOL):
     return vals, errs
 
 
-def check_fit(name: str, fit: str, thetas=THETAS, quick: bool = False) -> FitCheck:
+def check_fit(name: str, fit: str, thetas_deg=THETAS_DEG, quick: bool = False) -> FitCheck:
     """The :class:`FitCheck` of one material of one fit set."""
-    return check_model(material(name, fit), name, fit, thetas, quick=quick)
+    return check_model(material(name, fit), name, fit, thetas_deg, quick=quick)
 
 
-def check_model(model, name: str = "", fit: str = "", thetas=THETAS, quick: bool = False) -> FitCheck:
+def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG, quick: bool = False) -> FitCheck:
     """The :class:`FitCheck` of any :class:`~plausible.models.sum.Sum` (``name``
     and ``fit`` only label the row).  ``quick``: albedos to :data:`QUICK_TOL`,
     reciprocity on the :data:`QUICK_RECIPROCITY` grid."""
@@ -117,11 +118,11 @@ def check_model(model, name: str = "", fit: str = "", thetas=THETAS, quick: bool
         rec = reciprocity(model, n_theta=QUICK_RECIPROCITY[0], n_phi=QUICK_RECIPROCITY[1])
     else:
         rec = reciprocity(model)
-    vals, errs = albedo_curve_of_sum(model, thetas, QUICK_TOL if quick else ALBEDO_TOL)
+    vals, errs = albedo_curve_of_sum(model, thetas_deg, QUICK_TOL if quick else ALBEDO_TOL)
     i, c = np.unravel_index(int(np.argmax(vals)), vals.shape)
-    return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas[i]),
+    return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas_deg[i]),
                     CHANNELS[c] if vals.shape[1] == 3 else "grey", float(np.max(vals[0])),
-                    float(errs[i, c]), tuple(float(t) for t in thetas),
+                    float(errs[i, c]), tuple(float(t) for t in thetas_deg),
                     tuple(float(x) for x in vals.max(axis=1)))
 
 
@@ -139,11 +140,11 @@ def work_list(fits=None, names=None) -> list[tuple]:
     return out
 
 
-def _check_chunk(chunk, thetas, quick):
-    return [check_fit(name, key, thetas, quick) for name, key in chunk]
+def _check_chunk(chunk, thetas_deg, quick):
+    return [check_fit(name, key, thetas_deg, quick) for name, key in chunk]
 
 
-def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None, quick: bool = False,
+def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, quick: bool = False,
                jobs: int = 1) -> list[FitCheck]:
     """:func:`check_fit` of every material (or ``names``) of every loadable fit
     set (or ``fits``; see :func:`work_list`).  ``progress``, if given, is called
@@ -154,7 +155,7 @@ def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None, quick: bo
     if jobs <= 1 or len(work) < 2:
         rows = []
         for name, key in work:
-            rows.append(check_fit(name, key, thetas, quick))
+            rows.append(check_fit(name, key, thetas_deg, quick))
             if progress:
                 progress()
         return rows
@@ -164,7 +165,7 @@ def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None, quick: bo
     chunks = [work[s:s + size] for s in range(0, len(work), size)]
     rows = []
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for got in pool.map(_check_chunk, chunks, [thetas] * len(chunks), [quick] * len(chunks)):
+        for got in pool.map(_check_chunk, chunks, [thetas_deg] * len(chunks), [quick] * len(chunks)):
             rows.extend(got)
             if progress:
                 for _ in got:
@@ -251,5 +252,5 @@ def write_tables(rows, out) -> list[Path]:
     return written
 
 
-__all__ = ["FitCheck", "QUICK_TOL", "THETAS", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model",
+__all__ = ["FitCheck", "QUICK_TOL", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model",
            "default_jobs", "markdown", "summary", "work_list", "write_tables"]
