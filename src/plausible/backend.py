@@ -10,7 +10,10 @@ one of two backends of the same formulas:
   hooks are traced once per call into one LLVM kernel (float64, all cores),
   compiled on first use and then taken from Dr.Jit's kernel cache (in memory,
   and on disk in ``~/.drjit``) whenever the formula's shape and constants are
-  the same (parameters are constants of the kernel; directions are not).
+  the same.  Parameters enter as kernel data, not constants
+  (:mod:`plausible.kernel_params`): one kernel per model *structure* serves
+  every parameter value; a structure whose hooks need float parameters runs
+  with them as constants (one kernel per parameter set).
 
 The rule (see ``docs/backends.md``):
 
@@ -20,7 +23,7 @@ The rule (see ``docs/backends.md``):
 2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
    and the call has at least :data:`AUTO_MIN_ROWS` direction pairs
    (:data:`AUTO_MIN_NODES` quadrature nodes; :data:`AUTO_MIN_NEW` for a model
-   and parameter set not yet compiled in this process; below that, tracing and
+   structure not yet compiled in this process; below that, tracing and
    compiling cost more than NumPy's arithmetic), NumPy otherwise;
 3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
 4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
@@ -55,14 +58,13 @@ AUTO_MIN_ROWS = 1 << 15
 #: The same for quadrature (:mod:`plausible.analysis.albedo`): its kernel does
 #: not depend on the grid or the incidence, so it is compiled once per model.
 AUTO_MIN_NODES = 1 << 14
-#: The thresholds above hold once a model (its class and parameters) has run on
-#: Dr.Jit in this process; before that ``auto`` asks for this many, where NumPy
-#: takes longer than compiling a kernel (a fit's objective, which makes a new
-#: parameter set at every step, so stays on NumPy for its small batches).
+#: The thresholds above hold once a model structure (:func:`kernel_key`) has run
+#: on Dr.Jit in this process; before that ``auto`` asks for this many, where NumPy
+#: takes longer than compiling a kernel.
 AUTO_MIN_NEW = 1 << 18
 
 _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
-#: ``(kernel, class, repr)`` of the models ``auto`` has sent to Dr.Jit (compiled).
+#: ``(kernel, kernel_key(model))`` of the models ``auto`` has sent to Dr.Jit (compiled).
 _TRACED: set = set()
 #: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
 _NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
@@ -313,6 +315,44 @@ def kernel_view(model, dr, F, chan, reps: int):
     return model._kernel_view(convert)
 
 
+class PairKernel:
+    """``f`` of many models at fixed direction pairs on Dr.Jit: the pairs enter
+    once (unit ``(n, 3)`` arrays; the caller validates and normalises them), and
+    each call traces ``model._f`` with the model's parameters as kernel data, so
+    every model of one structure runs the same compiled kernel (a fit's
+    objective, a parameter sweep).  ``kernel(model)`` is ``model.eval(wi, wo)``:
+    ``(n,)`` or ``(n, channels)``; a model whose hooks do not run on Dr.Jit
+    gets NumPy's ``model.eval`` (the rule of :func:`run`)."""
+
+    def __init__(self, wi: np.ndarray, wo: np.ndarray):
+        self.wi = np.ascontiguousarray(wi, dtype=np.float64).reshape(-1, 3)
+        self.wo = np.ascontiguousarray(wo, dtype=np.float64).reshape(-1, 3)
+        if self.wi.shape != self.wo.shape:
+            raise ValueError(f"PairKernel: wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
+        self.n = len(self.wi)
+        self._lanes = {}
+
+    def _block(self, reps):
+        if reps not in self._lanes:
+            L = _Lanes(self.n, reps)
+            wi, wo = L.vectors(self.wi), L.vectors(self.wo)
+            L.dr.eval(*wi, *wo)
+            self._lanes[reps] = (L, wi, wo)
+        return self._lanes[reps]
+
+    def _jit(self, model):
+        c = model.channels or 1
+        L, wi, wo = self._block(c)
+        v = L.view(model)
+        f = v._f(L.ops, wi, wo, v.p)
+        return L.numpy(f, self.n * c).reshape((self.n, c) if model.channels else (self.n,))
+
+    def __call__(self, model) -> np.ndarray:
+        if model in _NUMPY_ONLY:
+            return model.eval(self.wi, self.wo, backend="numpy")
+        return run(model, "eval", lambda: model.eval(self.wi, self.wo, backend="numpy"), lambda: self._jit(model))
+
+
 def _is_jit(x) -> bool:
     import drjit as dr
 
@@ -478,5 +518,5 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     return np.asarray(total.numpy(), dtype=np.float64)
 
 
-__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available",
+__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "PairKernel", "choose", "drjit_available",
            "grid_sums", "kernel_key", "kernel_log", "kernel_view", "requested", "run", "structure_of", "use"]
