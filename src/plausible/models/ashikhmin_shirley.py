@@ -60,15 +60,17 @@ def half_vector_exponent(ops, h, nu, nv):
     """``nu cos^2(phi_h) + nv sin^2(phi_h) = (nu hu^2 + nv hv^2) / (1 - hn^2)``
     (journal eq. 4, report eq. 16), without trigonometry.
 
-    Isotropic fast path: when ``nu == nv`` the exponent is ``nu`` itself (no
-    division, no 0/0 at ``h = n``); otherwise
-    :func:`plausible.warps.anisotropic_exponent`.  Plain floats choose in Python;
-    arrays (parameters as kernel data, textures) by ``ops.where``, so the same
-    kernel serves both cases.
+    Isotropic fast path: when ``nu == nv`` as plain floats the exponent is ``nu``
+    itself (no division, no 0/0 at ``h = n``); otherwise
+    :func:`plausible.warps.anisotropic_exponent`, which equals ``nu`` to rounding
+    when ``nu == nv``.  Arrays (parameters as kernel data, differentiable
+    textures) always take the general formula: one kernel for every value, and
+    derivatives with respect to both exponents (an ``ops.where`` on ``nu == nv``
+    would give ``nv`` a zero derivative at ``nu == nv``).
     """
-    if isinstance(nu, float) and isinstance(nv, float):
-        return nu if nu == nv else warps.anisotropic_exponent(ops, h[0], h[1], nu, nv)
-    return ops.where(nu == nv, nu, warps.anisotropic_exponent(ops, h[0], h[1], nu, nv))
+    if isinstance(nu, float) and isinstance(nv, float) and nu == nv:
+        return nu
+    return warps.anisotropic_exponent(ops, h[0], h[1], nu, nv)
 
 
 def half_vector_density(ops, h, nu, nv):
