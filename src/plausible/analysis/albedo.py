@@ -20,7 +20,7 @@ import numpy as np
 from .. import backend as _backend
 from ..bxdf import BxDF, as_directions
 from ..progress import start
-from .quadrature import lobe_breaks, panel_rule
+from .quadrature import half_vector_breaks, half_vector_tmax, panel_rule
 
 
 @dataclass(frozen=True)
@@ -53,21 +53,26 @@ TOL = 1e-6
 
 
 class _Rules:
-    """The panel rules of one incidence: breakpoints per floor refinement (cached)
-    and the tensor rule's 1-D nodes and weights per ``(m, refine)``."""
+    """The panel rules of one incidence in the half-vector frame
+    (:func:`~.quadrature.half_vector_breaks`): breakpoints per floor refinement
+    (cached) and the tensor rule's 1-D nodes and weights per ``(m, refine)``."""
 
-    def __init__(self, model, wi, levels):
-        self.model, self.wi, self.levels = model, wi, levels
+    def __init__(self, model, wi, levels, axes=True):
+        self.model, self.wi, self.levels, self.axes = model, wi, levels, axes
         self._breaks = {}
         self.sums = {}
 
     def nodes(self, m, refine):
+        """``(s, ws, phi, wp, tmax)``: the nodes and weights in ``s`` and ``phi`` and
+        ``tmax(phi)`` (the node of ``(s, phi)`` is the half vector at polar angle
+        ``s tmax(phi)``; see :func:`_grid_sum`)."""
         if refine not in self._breaks:
-            self._breaks[refine] = lobe_breaks(self.wi, self.model.peak_directions(self.wi), self.levels, refine)[:2]
-        tb, pb = self._breaks[refine]
-        t, wt = panel_rule(tb, m)
+            self._breaks[refine] = half_vector_breaks(self.wi, self.model.peak_directions(self.wi),
+                                                      self.levels, refine, axes=self.axes)
+        sb, pb = self._breaks[refine]
+        s, ws = panel_rule(sb, m)
         p, wp = panel_rule(pb, m)
-        return t, wt * np.sin(t), p, wp
+        return s, ws, p, wp, half_vector_tmax(self.wi, p)
 
 
 def _pad(rows):
@@ -109,28 +114,33 @@ def _jit_sums(model, kind, rules, requests, grids):
     for key in sorted({(m, r) for _, m, r in requests}):
         idx = [k for k, (_, m, r) in enumerate(requests) if (m, r) == key]
         wis = np.array([rules[requests[k][0]].wi for k in idx])
-        cols = [_pad([grids[k][c] for k in idx]) for c in range(4)]
+        cols = [_pad([grids[k][c] for k in idx]) for c in range(5)]
         for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
             for row, k in enumerate(idx):
                 cols[w][row, len(grids[k][c]):] = 0.0
-        for k, v in zip(idx, _backend.grid_sums(model, kind, wis, *cols)):
+        for k, v in zip(idx, _backend.grid_sums(model, kind, wis, *cols[:4], tmax=cols[4])):
             res[k] = v
     return res
 
 
 def _grid_sum(model, kind, wi, grid):
-    """One tensor-rule sum through the contract (``eval`` or ``pdf`` on the grid)."""
-    t, wt, p, wp = grid
+    """One tensor-rule sum through the contract (``eval`` or ``pdf`` on the grid):
+    the node ``(s, phi)`` is the half vector ``h`` at polar angle ``t = s tmax(phi)``,
+    the direction ``wo = 2 (wi.h) h - wi`` and the weight
+    ``ws wp tmax sin(t) 4 (wi.h)`` (``d omega_o = 4 (wi.h) d omega_h``)."""
+    s, ws, p, wp, tmax = grid
+    t = s[:, None] * tmax[None, :]
     st, ct = np.sin(t), np.cos(t)
-    wo = np.stack(np.broadcast_arrays(st[:, None] * np.cos(p)[None, :],
-                                      st[:, None] * np.sin(p)[None, :], ct[:, None]), axis=-1)
+    h = np.stack(np.broadcast_arrays(st * np.cos(p)[None, :], st * np.sin(p)[None, :], ct), axis=-1)
+    d = h @ wi
+    wo = 2.0 * d[..., None] * h - wi
     if kind == "f":
         vals = model.eval(wi, wo)
         c = wo[..., 2]
         vals = vals * (c[..., None] if vals.ndim == c.ndim + 1 else c)
     else:
         vals = model.pdf(wi, wo)
-    w = wt[:, None] * wp[None, :]
+    w = ws[:, None] * (wp * tmax)[None, :] * st * (4.0 * d)
     if vals.ndim == w.ndim + 1:
         w = w[..., None]
     return np.sum(vals * w, axis=(0, 1))
@@ -179,7 +189,8 @@ def _integrate(model, kind, wis, tol, levels):
     against the closed form).  While the bound exceeds ``tol``, the larger of the two causes is
     refined: the next order, or a 2x finer floor.  All incidences still
     refining are computed together (on Dr.Jit, one launch per rule)."""
-    rules = [_Rules(model, wi, levels) for wi in wis]
+    axes = not is_isotropic(model)   # grade toward the tangent axes only where they matter
+    rules = [_Rules(model, wi, levels, axes) for wi in wis]
     state = {a: (1, 1) for a in range(len(wis))}   # index into ORDERS, floor refinement
     values, errors = [None] * len(wis), [None] * len(wis)
     while state:
