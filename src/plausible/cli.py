@@ -264,7 +264,7 @@ def _print_report(rep):
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
-        style = "green" if row[3] == "PASS" else "red"
+        style = {"PASS": "green", "UNRESOLVED": "yellow"}.get(row[3], "red")
         style = "yellow" if row[3] == "N/A" else style
         t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)

@@ -1,5 +1,10 @@
 """Deterministic quadrature over the hemisphere, refined toward a lobe.
 
+Two parametrisations: the half-vector frame of :func:`half_vector_breaks` (the
+albedo and pdf integrals of :mod:`plausible.analysis.albedo`: the mirror
+direction is the pole), and spherical angles about the normal (below; the
+chi-square cells and the fits' grids).
+
 Directions are parametrised by the spherical angles ``(theta, phi)`` about the
 normal, so the horizon ``theta = pi/2`` is an edge of the domain (a lobe clipped
 by the horizon needs no special care).  Both angles are cut into panels whose

@@ -33,6 +33,14 @@ class CheckReport:
     def passed(self) -> bool:
         return all(r.passed for r in self.results)
 
+    @property
+    def verdict(self) -> str:
+        """``PASS``, ``FAIL`` (some property fails) or ``UNRESOLVED`` (none fails, but
+        some could not be established: :attr:`PropertyResult.unresolved`)."""
+        if self.passed:
+            return "PASS"
+        return "FAIL" if any(not r.passed and not r.unresolved for r in self.results) else "UNRESOLVED"
+
     def __getitem__(self, name) -> PropertyResult:
         for r in self.results:
             if r.name == name:
@@ -40,7 +48,7 @@ class CheckReport:
         raise KeyError(name)
 
     def to_dict(self):
-        return jsonable(dict(model=self.model, params=self.params, passed=self.passed,
+        return jsonable(dict(model=self.model, params=self.params, passed=self.passed, verdict=self.verdict,
                              results=[r.to_dict() for r in self.results], notes=self.notes))
 
     def to_json(self, **kw) -> str:
@@ -62,12 +70,13 @@ class CheckReport:
             worst = ", ".join(f"{k}={_short(v)}" for k, v in list(w.items())[:4])
             if r.worst.get("problems"):
                 worst = r.worst["problems"][0] + ("; " + worst if worst else "")
-            verdict = "N/A" if not applicable(r) else "PASS" if r.passed else "FAIL"
+            verdict = "N/A" if not applicable(r) else "PASS" if r.passed else \
+                "UNRESOLVED" if r.unresolved else "FAIL"
             out.append((r.name, f"{r.figure:.6g}", r.bound, verdict, worst))
         return out
 
     def __str__(self):
-        lines = [f"check {self.model} {self.params}: {'PASS' if self.passed else 'FAIL'}"]
+        lines = [f"check {self.model} {self.params}: {self.verdict}"]
         lines += ["  " + " | ".join(r) for r in self.rows()]
         lines += ["  note: " + n for n in self.notes]
         return "\n".join(lines)

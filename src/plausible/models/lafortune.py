@@ -138,8 +138,9 @@ def normalised_lobes(lobes):
         m = c_max((cx, cy, cz))
         if m == 0.0:
             continue
-        scale = math.exp(n * math.log(m))  # m^n; exactly 1 for m == 1
-        out.append((cx / m, cy / m, cz / m, n, rho * scale))
+        log_scale = n * math.log(m)   # m^n; exactly 1 for m == 1 (inf past the float range:
+        scale = math.exp(log_scale) if log_scale < 709.0 else math.inf   # the bound then refuses it)
+        out.append((cx / m, cy / m, cz / m, n, rho * scale if rho > 0 else 0.0))
     return out
 
 
