@@ -8,9 +8,9 @@ STAMP    := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12
 OUT      ?= out
 JOBS     ?= 2
 
-.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium clean
+.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium glslang clean
 
-setup: $(STAMP) llvm chromium
+setup: $(STAMP) llvm chromium glslang
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -31,6 +31,13 @@ chromium:
 	@if ! command -v chromium >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
 	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; fi; \
+	fi
+
+# The Khronos reference GLSL compiler for the shader export's tests (tests/export/test_glslang.py).
+glslang:
+	@if ! command -v glslangValidator >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq glslang-tools >/dev/null; \
+	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq glslang-tools >/dev/null; fi; \
 	fi
 
 # The main job: every figure of the papers, measured, as a browsable report -> $(OUT)/index.html.

@@ -7,6 +7,7 @@ command line (``plausible models``), the Mitsuba plugins and the tests read them
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -111,11 +112,13 @@ def parse_groups(text: str) -> list:
     by commas or spaces (the one parser of structured values, used by the command
     line through :func:`parse_value` and by the Mitsuba plugins' string properties).
 
-    ``"-1 -1 1 20 1.75; 1,1,1,5,0.1"`` -> ``[[-1.0, -1.0, 1.0, 20.0, 1.75], [1.0, 1.0, 1.0, 5.0, 0.1]]``.
+    ``"-1 -1 1 20 1.75; 1,1,1,5,0.1"`` -> ``[[-1.0, -1.0, 1.0, 20.0, 1.75], [1.0, 1.0, 1.0, 5.0, 0.1]]``;
+    the tuple form ``"(-1, -1, 1, 20, 1.75), (1, 1, 1, 5, 0.1)"`` gives the same.
     A word raises :class:`ValueError` naming the group and the text given.
     """
+    groups = _parenthesised(text) if "(" in text or ")" in text else text.split(";")
     out = []
-    for g in text.split(";"):
+    for g in groups:
         if not g.strip():
             continue
         try:
@@ -124,6 +127,21 @@ def parse_groups(text: str) -> list:
             raise ValueError(f"groups of numbers separated by ';' (numbers by commas or spaces) "
                              f"expected, got {g.strip()!r} in {text!r}") from None
     return out
+
+
+def _parenthesised(text: str) -> list:
+    """The groups of ``"(a, b), (c, d)"`` or ``"[(a, b), (c, d)]"`` (the form Python
+    and ``plausible models`` print a tuple of tuples in); between the groups only
+    commas, semicolons and spaces."""
+    body = text.strip()
+    if body.startswith("[") and body.endswith("]"):
+        body = body[1:-1]
+    groups = re.findall(r"\(([^()]*)\)", body)
+    rest = re.sub(r"\(([^()]*)\)", " ", body)
+    if not groups or rest.strip(" ,;\t"):
+        raise ValueError(f"groups of numbers in parentheses, '(a, b, c), (d, e, f)', or separated by ';' "
+                         f"expected, got {text!r}")
+    return groups
 
 
 def format_groups(value) -> str:
@@ -135,7 +153,7 @@ def parse_value(text: str):
     """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour), groups
     separated by ``;`` (``-1,-1,1,20,1.5;1,1,1,8,0.3``: a list of tuples, e.g.
     Lafortune's lobes; :func:`parse_groups`) or a word."""
-    if ";" in text:
+    if ";" in text or text.lstrip().startswith(("(", "[(")):
         return parse_groups(text)
     parts = [t.strip() for t in text.split(",")]
     try:

@@ -25,6 +25,7 @@ import numpy as np
 from .. import backend as _backend
 from ..bxdf import BxDF, as_directions
 from ..progress import start
+from ..vec import direction as _direction
 from .quadrature import half_vector_breaks, half_vector_tmax, panel_rule
 
 
@@ -39,11 +40,37 @@ class AlbedoResult:
     def __float__(self):
         return float(np.mean(self.value))
 
+    # the numeric protocol: a result computes as its value (sum(results), a + 0,
+    # 2 * a, a <= 1, np.asarray(a)); the error bound is dropped
+    def __array__(self, dtype=None, copy=None):
+        return np.asarray(self.value, dtype=dtype)
+
+    def _repr_html_(self) -> str:
+        from ..text import html_table
+
+        v, e = np.atleast_1d(self.value).ravel(), np.atleast_1d(self.error).ravel()
+        return html_table("AlbedoResult", ["value", "error bound"], [(f"{a:.6g}", f"{b:.1e}") for a, b in zip(v, e)])
+
+
+def _value_op(name):
+    op = getattr(np.ndarray, name, None) or getattr(float, name)
+
+    def method(self, *other):
+        return op(np.asarray(self.value, dtype=np.float64), *(np.asarray(o.value) if isinstance(o, AlbedoResult)
+                                                             else o for o in other))
+    method.__name__ = name
+    return method
+
+
+for _name in ("__add__", "__radd__", "__sub__", "__rsub__", "__mul__", "__rmul__", "__truediv__",
+              "__rtruediv__", "__pow__", "__neg__", "__abs__", "__lt__", "__le__", "__gt__", "__ge__"):
+    setattr(AlbedoResult, _name, _value_op(_name))
+
 
 def direction(theta: float, phi: float = 0.0) -> np.ndarray:
-    """Unit vector with polar angle ``theta`` and azimuth ``phi`` (radians)."""
-    s = math.sin(theta)
-    return np.array([s * math.cos(phi), s * math.sin(phi), math.cos(theta)])
+    """Unit vector with polar angle ``theta`` and azimuth ``phi`` (radians):
+    :func:`plausible.vec.direction` (``plausible.direction``), for one angle pair."""
+    return _direction(float(theta), float(phi))
 
 
 #: Gauss-Legendre orders of the panel rule, tried in turn (each against the one before).
@@ -222,6 +249,10 @@ def _integrate(model, kind, wis, tol, levels):
 
 
 def _unit_incidence(wi):
+    if np.ndim(wi) == 0 and isinstance(wi, (int, float, np.number)):
+        raise ValueError(f"wi must be a direction (x, y, z), got the number {wi!r}; for an incidence "
+                         f"angle use plausible.direction(theta) with theta in radians, e.g. "
+                         f"albedo(m, plausible.direction(math.radians({wi!r})))")
     wi = as_directions("wi", wi)  # names wi and the value in every error (a string, NaN, a zero vector)
     if wi.shape != (3,):
         raise ValueError(f"wi must be one direction of shape (3,), got {wi.shape}")
@@ -278,17 +309,32 @@ def pdf_integrals(model, wis, *, tol: float = TOL, levels: int = 13) -> list:
     return [AlbedoResult(float(r.value), float(r.error)) for r in res]
 
 
-def albedo_curve(model, thetas, phi: float = 0.0, progress=None, **kw) -> AlbedoResult:
-    """Directional albedo at polar angles ``thetas`` (radians) and azimuth ``phi``.
+def albedo_curve(model, thetas=None, phi: float = 0.0, progress=None, *, thetas_deg=None,
+                 phi_deg=None, **kw) -> AlbedoResult:
+    """Directional albedo at polar angles ``thetas`` and azimuth ``phi``
+    (radians), or ``thetas_deg`` and ``phi_deg`` (degrees): give one of each pair.
 
     Returns an :class:`AlbedoResult` whose ``value``/``error`` have shape
     ``(len(thetas),)`` (plus a channel axis for colour models).  All angles are
     integrated together (:func:`albedos`; ``tol`` and ``levels`` pass on).
     ``progress``: a :mod:`plausible.progress` factory, ticked once per angle.
+    ``thetas`` beyond ``pi/2`` are refused as likely degrees.
     """
+    if (thetas is None) == (thetas_deg is None):
+        raise ValueError("give the incidence angles as thetas (radians) or thetas_deg (degrees), not "
+                         + ("both" if thetas is not None else "neither"))
+    if phi_deg is not None:
+        if phi != 0.0:
+            raise ValueError("give the azimuth as phi (radians) or phi_deg (degrees), not both")
+        phi = math.radians(float(phi_deg))
+    if thetas is None:
+        thetas = np.radians(np.asarray(thetas_deg, dtype=np.float64))
     thetas = np.atleast_1d(np.asarray(thetas, dtype=np.float64))
     if np.any(~np.isfinite(thetas)) or np.any(thetas < 0) or np.any(thetas > math.pi / 2):
-        raise ValueError("thetas must lie in [0, pi/2] radians")
+        bad = thetas[~(np.isfinite(thetas) & (thetas >= 0) & (thetas <= math.pi / 2))]
+        hint = (" (degrees? pass thetas_deg=..., or np.radians(thetas))"
+                if np.all(np.isfinite(bad)) and np.all(bad > math.pi / 2) and np.all(bad <= 90) else "")
+        raise ValueError(f"thetas must lie in [0, pi/2] radians, got {float(bad[0]):g}{hint}")
     tick = start(progress, len(thetas), f"albedo {model.name}")
     res = albedos(model, [direction(t, phi) for t in thetas], **kw)
     tick(len(res))

@@ -48,8 +48,29 @@ class CheckReport:
         raise KeyError(name)
 
     def to_dict(self):
+        """Plain data (JSON).  A check that was not applicable has ``passed`` and
+        ``figure`` null (not a pass, not a number); ``counts`` tallies passed,
+        failed and not applicable apart."""
+        results = []
+        for r in self.results:
+            d = r.to_dict()
+            if not applicable(r):
+                d.update(passed=None, figure=None)
+            results.append(d)
+        n_a = sum(not applicable(r) for r in self.results)
+        unresolved = sum(applicable(r) and r.unresolved for r in self.results)
+        failed = sum(applicable(r) and not r.passed and not r.unresolved for r in self.results)
+        counts = dict(passed=len(self.results) - n_a - failed - unresolved, failed=failed,
+                      unresolved=unresolved, not_applicable=n_a)
         return jsonable(dict(model=self.model, params=self.params, passed=self.passed, verdict=self.verdict,
-                             results=[r.to_dict() for r in self.results], notes=self.notes))
+                             counts=counts,
+                             results=results, notes=self.notes))
+
+    def _repr_html_(self) -> str:
+        from ..text import html_table
+
+        return html_table(f"check {self.model}: {self.verdict}",
+                          ["property", "figure", "bound", "verdict", "worst case"], self.rows())
 
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), **kw)

@@ -154,16 +154,36 @@ class Context:
         """Register a file the figure wrote itself into ``ctx.out``."""
         self.items.append(dict(kind="data", file=name, caption=caption))
 
-    def measure(self, quantity: str, measured, expected=None, tol=None, note: str = "", at_most=None):
-        """A number measured on the figure; with ``expected`` and ``tol`` it is a
-        check (``ok = |measured - expected| <= tol``); with ``at_most`` a bound
-        (``ok = measured <= at_most``)."""
+    def measure(self, quantity: str, measured, expected=None, tol=None, note: str = "", at_most=None,
+                at_least=None):
+        """A number measured on the figure.  It is a check when given
+
+        * ``expected`` and ``tol``: ``ok = |measured - expected| <= tol``;
+        * ``at_most`` and/or ``at_least``: ``ok = at_least <= measured <= at_most``;
+        * a boolean ``measured`` with a boolean ``expected``: ``ok = measured == expected``
+          (shown as yes / no).
+
+        Every value stored is a number (or a boolean); the report writes the bounds
+        as ``<= x`` / ``>= x`` in its "expected" column."""
+        if isinstance(measured, (bool, np.bool_)) or isinstance(expected, (bool, np.bool_)):
+            if not isinstance(expected, (bool, np.bool_, type(None))):
+                raise ValueError(f"measure({quantity!r}): a boolean is compared with a boolean, got {expected!r}")
+            m = dict(quantity=quantity, measured=bool(measured), expected=None if expected is None
+                     else bool(expected), tol=None, note=note)
+            if expected is not None:
+                m["ok"] = bool(measured) == bool(expected)
+            self.measurements.append(m)
+            return m
+        for k, v in (("expected", expected), ("tol", tol), ("at_most", at_most), ("at_least", at_least)):
+            if v is not None and not isinstance(v, (int, float, np.integer, np.floating)):
+                raise ValueError(f"measure({quantity!r}): '{k}' must be a number, got {v!r}")
         m = dict(quantity=quantity, measured=_num(measured), expected=_num(expected), tol=_num(tol), note=note)
         if expected is not None and tol is not None:
             m["ok"] = bool(abs(float(measured) - float(expected)) <= float(tol))
-        if at_most is not None:
-            m["expected"] = f"<= {float(at_most):.6g}"
-            m["ok"] = bool(float(measured) <= float(at_most))
+        if at_most is not None or at_least is not None:
+            m.update(at_most=_num(at_most), at_least=_num(at_least))
+            x = float(measured)
+            m["ok"] = bool((at_most is None or x <= float(at_most)) and (at_least is None or x >= float(at_least)))
         self.measurements.append(m)
         return m
 

@@ -57,6 +57,7 @@ cosine weighted.  ``pdf`` is the same mixture.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,11 +65,16 @@ import numpy as np
 from .. import vec, warps
 from ..bxdf import BxDF, above
 from ..ops import INV_PI, PI
-from ..params import Param
+from ..params import Param, parse_groups
 from ..registry import register
 
 #: Largest lobe exponent accepted (the same range as the Phong family's ``n``).
 N_MAX = 1e6
+
+#: How the lobes are written on the command line (shown by every error of :class:`LobesParam`).
+FORMS = ("on the command line -p lobes=cx,cy,cz,n,rho (one lobe), "
+         "-p 'lobes=cx,cy,cz,n,rho;cx,cy,cz,n,rho' or -p 'lobes=(cx, cy, cz, n, rho), (cx, cy, cz, n, rho)', "
+         "e.g. -p lobes=-1,-1,1,20,1.75")
 
 #: Default: one reciprocal-Phong lobe of exponent 20 and albedo 0.5 at normal
 #: incidence (``rho = 0.5 (n + 2) / (2 pi)``), with ``rd = 0.3``.
@@ -92,13 +98,23 @@ class LobesParam(Param):
 
     def validate(self, value, owner: str = "model"):
         where = f"{owner}: parameter '{self.name}'"
-        rng = self.range_text()
-        if isinstance(value, (str, bytes)) or np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
+        rng = self.range_text() + "; " + FORMS
+        if isinstance(value, str):
+            try:    # the command line's forms (plausible.params.parse_groups)
+                value = parse_groups(value)
+            except ValueError:
+                raise ValueError(f"{where} must be {rng}, got {value!r}") from None
+        if isinstance(value, bytes) or np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
             raise ValueError(f"{where} must be {rng}, got {value!r}")
         try:
             items = list(value)
         except TypeError:
             raise ValueError(f"{where} must be {rng}, got {value!r}") from None
+        if items and all(isinstance(x, numbers.Real) for x in items):
+            if len(items) != 5:
+                raise ValueError(f"{where}: one lobe is 5 numbers (cx, cy, cz, n, rho), got {len(items)} "
+                                 f"numbers {value!r}; {rng}")
+            items = [items]     # one lobe given as its five numbers (-p lobes=-1,-1,1,20,1.75)
         out = []
         for i, lobe in enumerate(items):
             try:

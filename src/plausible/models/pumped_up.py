@@ -5,7 +5,11 @@ An operator on any reciprocal BRDF ``f`` (``neumann-neumann-szirmay-kalos-albedo
 * eq. 16: ``f*(L, V) = f(L, V) / g(L, V)`` with ``g`` symmetric and
   ``max(a(L), a(V)) <= g(L, V)`` (eq. 17), ``a`` the directional albedo of ``f``;
 * eq. 20: ``g1(L, V) = max(a(L), a(V))`` (``correction="max"``);
-* eq. 21: ``g2(L, V) = max(a(L), a(V), (N.V)(N.L))`` (``correction="controlled"``).
+* eq. 21: ``g2(L, V) = max(a(L), a(V), N.V, N.L)`` (``correction="controlled"``; the
+  control term caps the total correction of repeated pumpings, see :func:`correction`);
+  ``correction="controlled-product"`` is the other reading of the OCR'd text,
+  ``max(a(L), a(V), (N.V)(N.L))`` at every level (docs/models/pumped-up.md says
+  why the first is followed).
 
 Then ``a(L) <= a*(L) <= 1`` (eq. 18-19): ``a*(L) = int f / g cos <= int f / a(L) cos = 1``.
 The proof needs only ``g >= max(a(L), a(V))``; the upper bound ``g <= 1`` of
@@ -18,7 +22,8 @@ with ``G = 1``: the paper's sec. 2.1) has no finite ``g`` and is refused
 (:func:`check_bounded_albedo`).
 
 Applied ``times`` times, each level divides by the ``g`` built from the albedo of
-the level below: ``f_k = f_{k-1} / g(a_{k-1})``.  Each level's albedo is
+the level below: ``f_k = f_{k-1} / g(a_{k-1})`` (for ``"controlled"``, ``f_k = f /
+max(prod_j g1(a_j), N.L, N.V)``).  Each level's albedo is
 integrated once with :func:`plausible.analysis.albedo_table` (the accurate
 quadrature; 1-D in ``theta`` for an isotropic base, 2-D with azimuth otherwise),
 interpolated with Catmull-Rom cubics (:class:`plausible.tables.AngleTable`), and
@@ -211,17 +216,42 @@ def check_bounded_albedo(model, owner: str = "PumpedUp", progress=None) -> None:
             f"'cook-torrance' with geometry=vgroove or 'ward' with variant=balanced.")
 
 
-def correction(ops, kind, a_l, a_v, wi, wo):
-    """``g1 = max(a(L), a(V))`` (eq. 20) or ``g2 = max(a(L), a(V), (N.V)(N.L))`` (eq. 21)."""
-    g = ops.maximum(a_l, a_v)
+#: The corrections: eq. 20; eq. 21 read as a four-way maximum that caps the total
+#: correction; eq. 21 read as the OCR prints it, a product, at every level.
+CORRECTIONS = ("max", "controlled", "controlled-product")
+
+
+def correction(ops, kind, albedos, wi, wo):
+    """The divisor ``G_k`` of ``f_k = f / G_k`` after ``k = len(albedos)`` pumpings;
+    ``albedos`` holds the pairs ``(a_j(L), a_j(V))`` of the levels ``j = 0 .. k-1``
+    (``a_j``: the albedo of the model pumped ``j`` times).
+
+    * ``"max"`` (eq. 20): ``G_k = prod_j g1_j``, ``g1_j = max(a_j(L), a_j(V))``.
+    * ``"controlled"`` (eq. 21, ``g2 = max(a(L), a(V), N.V, N.L)``, the OCR's
+      ``max(a(L)v a(V)v (N : V)) (N ) L))`` with its commas restored):
+      ``G_k = max(prod_j g1_j, N.L, N.V)``.  One pumping is eq. 21 exactly; the
+      control term caps the total correction, so ``f_k cos(theta_L) <= f`` at every
+      level (the output radiance never exceeds the base's, sec. 3.2 and 5) and the
+      limit ``k -> oo`` is ``f / max(N.L, N.V)``: eq. 22 for the Phong base.  Each
+      level's own factor ``G_k / G_(k-1)`` lies between ``max(a_(k-1)(L), a_(k-1)(V))``
+      and 1, so every level satisfies eq. 17.
+    * ``"controlled-product"``: eq. 21 read as printed, ``max(a(L), a(V), (N.V)(N.L))``,
+      applied at every level: ``G_k = prod_j max(g1_j, (N.V)(N.L))``.
+    """
+    total = 1.0
+    for a_l, a_v in albedos:
+        g = ops.maximum(a_l, a_v)
+        if kind == "controlled-product":
+            g = ops.maximum(g, wi[2] * wo[2])
+        total = total * g
     if kind == "controlled":
-        g = ops.maximum(g, wi[2] * wo[2])
-    return g
+        total = ops.maximum(total, ops.maximum(wi[2], wo[2]))
+    return total
 
 
 @register("pumped-up",
           "Albedo pumping-up of a reciprocal base (Neumann et al. 1999, eq. 16, 20, 21): "
-          "f* = f / g, g = max(a(L), a(V)) [max] or max(a(L), a(V), N.L N.V) [controlled], "
+          "f* = f / g, g = max(a(L), a(V)) [max] or max(a(L), a(V), N.L, N.V) [controlled], "
           "applied 'times' times.",
           references=("Neumann, Neumann, Szirmay-Kalos, albedo pumping-up, 1999, sec. 3, eq. 16-21",))
 class PumpedUp(BxDF):
@@ -232,8 +262,9 @@ class PumpedUp(BxDF):
         ModelParam("base", "reciprocal-phong:ks=1:n=20",
                    doc="the reciprocal base model, 'name:k=v:...'",
                    extremes=("reciprocal-blinn:ks=1:n=20",)),
-        Param("correction", "max", kind="choice", choices=("max", "controlled"),
-              doc="g1 = max(a(L), a(V)) (eq. 20) or controlled g2 (eq. 21)",
+        Param("correction", "max", kind="choice", choices=CORRECTIONS,
+              doc="g1 = max(a(L), a(V)) (eq. 20), controlled g2 = max(a(L), a(V), N.V, N.L) capping the "
+                  "total (eq. 21), or eq. 21 as printed, max(a(L), a(V), (N.V)(N.L)) at every level",
               extremes=("controlled",)),
         Param("times", 1, 1, 8, integer=True, doc="how many times the operator is applied",
               extremes=(3,)),
@@ -265,12 +296,9 @@ class PumpedUp(BxDF):
         self.channels = chans.pop() if chans else None
 
     def g(self, ops, wi, wo):
-        """The product of the corrections of every level."""
-        total = 1.0
-        for tab in self.tables:
-            total = total * correction(ops, self.params["correction"], tab.lookup(ops, wi),
-                                       tab.lookup(ops, wo), wi, wo)
-        return total
+        """The total correction of every level (:func:`correction`)."""
+        return correction(ops, self.params["correction"],
+                          [(tab.lookup(ops, wi), tab.lookup(ops, wo)) for tab in self.tables], wi, wo)
 
     def _f(self, ops, wi, wo, p):
         f = self.base._f(ops, wi, wo, self.base.p)
