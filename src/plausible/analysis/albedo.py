@@ -343,11 +343,21 @@ def albedo_curve(model, thetas=None, phi: float = 0.0, progress=None, *, thetas_
 
 def is_isotropic(model, trials: int = 16, seed: int = 7) -> bool:
     """Probe the contract: does rotating both directions about the normal leave ``f``
-    unchanged (relative 1e-9) on random pairs?"""
+    unchanged (relative 1e-9) on random pairs, and on pairs near the mirror
+    direction at angular offsets 1e-1 to 1e-5 rad (where a narrow lobe is
+    non-zero: Ward with ``alpha_x = 1e-4`` is zero on every random pair)?"""
     rng = np.random.default_rng(seed)
     wi = _random_upper(rng, trials)
     wo = _random_upper(rng, trials)
-    a = rng.uniform(0, 2 * math.pi, trials)
+    near_i = np.repeat(_random_upper(rng, trials), 5, axis=0)
+    mirror = near_i * np.array([-1.0, -1.0, 1.0])
+    eps = np.tile(10.0 ** -np.arange(1, 6), trials)[:, None]
+    side = np.cross(mirror, rng.normal(size=mirror.shape))
+    side /= np.linalg.norm(side, axis=-1, keepdims=True)
+    near_o = mirror * np.cos(eps) + side * np.sin(eps)
+    near_o[:, 2] = np.abs(near_o[:, 2])
+    wi, wo = np.concatenate([wi, near_i]), np.concatenate([wo, near_o])
+    a = rng.uniform(0, 2 * math.pi, len(wi))
     c, s = np.cos(a), np.sin(a)
 
     def rot(w):
