@@ -20,3 +20,13 @@ def test_as_pdf_with_subnormal_diffuse_albedo_is_the_limit_not_nan():
     s = tiny.sample(wi, np.random.default_rng(0).random((1000, 3)))
     f = tiny.eval(wi, s.wo)
     assert np.all(np.isfinite(s.pdf)) and np.all((s.weight > 0) == (f > 0))
+
+
+def test_pumped_up_tables_of_nearby_exponents_are_not_shared():
+    # the cache key was repr(model), 6 significant digits: n=20 and n=20.00004 read one table
+    from plausible.models.pumped_up import spec_of
+
+    a = plausible.make("reciprocal-phong", n=20.0)
+    b = plausible.make("reciprocal-phong", n=20.00004)
+    assert repr(a) == repr(b) and spec_of(a) != spec_of(b)
+    assert spec_of(plausible.make("pumped-up", base=a)) != spec_of(plausible.make("pumped-up", base=b))

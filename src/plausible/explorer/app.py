@@ -18,9 +18,9 @@ The rules of the server (:class:`Budget`; docs/explorer.md):
 * a body is at most :attr:`Budget.body_bytes` and must arrive within
   :attr:`Budget.body_seconds` (413, 408); it must be a JSON object (422);
 * the views run in one worker thread, off the event loop, one at a time (the
-  computations share Dr.Jit's state); a request still running after
-  :attr:`Budget.seconds` is stopped and answered 503 with the budget, while the
-  server keeps answering other requests.
+  computations share Dr.Jit's state); a request still running
+  :attr:`Budget.seconds` after the worker took it up is stopped and answered
+  503 with the budget, while the server keeps answering other requests.
 """
 
 from __future__ import annotations
@@ -49,8 +49,8 @@ LOCAL_NAMES = ("127.0.0.1", "localhost", "[::1]")
 class Budget:
     """What one request may cost (docs/explorer.md)."""
 
-    #: Seconds of computation (and waiting for the worker) per request.
-    seconds: float = 30.0
+    #: Seconds of computation per request (from when the worker takes it up).
+    seconds: float = 60.0
     #: Largest request body in bytes.
     body_bytes: int = 64 * 1024
     #: Seconds for the body to arrive once the headers are in.
@@ -90,12 +90,17 @@ class Worker:
         self.current = None     # (job, thread id) while a job runs
 
     async def run(self, fn, seconds: float):
+        """``fn()`` in the worker; its budget of ``seconds`` starts when it starts
+        (a request waiting behind another one waits for its turn)."""
         job = object()
+        loop = asyncio.get_running_loop()
+        started = asyncio.Event()
 
         def call():
             tid = threading.get_ident()
             with self.lock:
                 self.current = (job, tid)
+            loop.call_soon_threadsafe(started.set)
             try:
                 return fn()
             finally:
@@ -103,17 +108,18 @@ class Worker:
                     self.current = None
                     _raise_in(tid, None)    # a stop that came as the job ended stays unraised
 
-        fut = self.pool.submit(call)
+        result = asyncio.wrap_future(self.pool.submit(call))
+        waiting = asyncio.ensure_future(started.wait())
+        await asyncio.wait({result, waiting}, return_when=asyncio.FIRST_COMPLETED)
+        waiting.cancel()
         try:
-            return await asyncio.wait_for(asyncio.wrap_future(fut), seconds)
+            return await asyncio.wait_for(result, seconds)
         except asyncio.TimeoutError:
             with self.lock:
                 if self.current is not None and self.current[0] is job:
                     _raise_in(self.current[1], OverBudget)
-            fut.cancel()        # not started yet (waiting behind another request)
-            raise HttpError(503, f"request over the time budget of {seconds:g} s: stopped (the server "
-                                 f"answers one computation at a time; ask for less work: a smaller "
-                                 f"'times' or base for pumped-up, fewer lobes)") from None
+            raise HttpError(503, f"request over the time budget of {seconds:g} s: stopped (ask for less "
+                                 f"work: a smaller 'times' or base for pumped-up, fewer lobes)") from None
 
 
 def _allowed_hosts(host: str | None, port: int | None) -> set:
@@ -217,8 +223,10 @@ def create_app(host: str | None = None, port: int | None = None, budget: Budget 
 
     def _theta(body):
         t = body.get("theta_i", 30.0)
-        if isinstance(t, bool) or not isinstance(t, (int, float)) or not 0.0 <= t <= 90.0:
+        if isinstance(t, bool) or not isinstance(t, (int, float)):
             raise ValueError(f"theta_i must be a number in [0, 90] degrees, got {json.dumps(t)[:40]}")
+        if not 0.0 <= t <= 90.0:
+            raise ValueError(f"theta_i must lie in [0, 90] degrees, got {t}")
         return float(t)
 
     def _text(body, key, default):
