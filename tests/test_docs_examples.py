@@ -1,4 +1,4 @@
-"""The examples of docs/fitting.md and docs/mitsuba.md run as written, on the
+"""The examples of docs/fitting.md, docs/mitsuba.md and docs/models/*.md run as written, on the
 files shipped in docs/examples/ (written by docs/examples/make_examples.py), and
 give what the docs say: the fit of the shipped samples recovers the parameters
 they were made from."""
@@ -19,7 +19,7 @@ from click.testing import CliRunner
 from plausible.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
-DOCS = ("fitting.md", "mitsuba.md")
+DOCS = ("fitting.md", "mitsuba.md") + tuple(f"models/{p.name}" for p in sorted((ROOT / "docs/models").glob("*.md")))
 #: Examples that take minutes (a perceptual fit to a model target with 4 starts, a 60 s fit).
 SLOW = ("--target cook-torrance", "plausible.fit(\"ashikhmin-shirley\"")
 

@@ -441,13 +441,15 @@ def _code_lines(code: str) -> list:
 
 
 def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> str:
-    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path``; returns the text.
-    ``prefix``: of the GLSL names (:func:`to_glsl`; a ``.brdf`` file holds one model)."""
+    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path`` (None:
+    no file); returns the text.  ``prefix``: of the GLSL names (:func:`to_glsl`;
+    a ``.brdf`` file holds one model)."""
     if fmt == "glsl":
         text = to_glsl(model, uniforms=uniforms, prefix=prefix).text
     elif fmt == "brdf":
         text = to_brdf(model)
     else:
         raise ValueError(f"export format must be 'glsl' or 'brdf', got {fmt!r}")
-    Path(path).write_text(text)
+    if path is not None:
+        Path(path).write_text(text)
     return text

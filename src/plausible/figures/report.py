@@ -104,6 +104,13 @@ def _index_all(out: Path, results: dict) -> Path:
     return write_index(out, allm)
 
 
+def _dir_mode() -> int:
+    """The mode ``mkdir`` gives a new folder under the current umask (0755 under 022)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o777 & ~mask
+
+
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
         progress=None) -> dict:
     """Make the figures (all, or the names in ``only``) into ``out`` and write
@@ -137,6 +144,7 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
                 continue
             _remove_partial(out, name)      # left by a run that was killed
             tmp = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out))
+            os.chmod(tmp, _dir_mode())      # mkdtemp makes 0700: the figure folder follows the umask
             ctx = Context(tmp, resolution=resolution, spp=spp, quick=quick,
                           progress=lambda total, label="", _n=name: start(progress, total, _n))
             t0 = time.time()

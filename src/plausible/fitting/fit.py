@@ -168,6 +168,8 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
     """
     if isinstance(target, Target):
         return target
+    if isinstance(target, str) and target.strip().startswith("material:"):   # a published fit
+        return as_target(registry.make_from_spec(target.strip()), thetas_deg=thetas_deg)
     if isinstance(target, (str, Path)):
         p = Path(target)
         if not p.exists() and (p.suffix.lower() in (".csv", ".binary", ".txt") or "/" in str(target)):
