@@ -392,7 +392,7 @@ CONTROLLED_NOTE = (
     "first, the output radiance never exceeds the base's, and the limit is eq. 22 at its bound c_n = (n + 2)/2pi "
     "(fig. 7). The other readings do not: the product (N.V)(N.L) never wins for Phong (a(theta) >= cos(theta)), "
     "so its curves are eq. 20's (fig. 5 would be a copy of fig. 3), and the four-way maximum applied afresh at "
-    "every level lets the grazing output radiance grow past the base's from the second pumping (Blinn: 4.8x at "
+    "every level lets the grazing output radiance grow past the base's from the second pumping (Blinn: 4.5x at "
     "80 degrees after two) and the albedo rise toward 1. The classic normalisation (n + 1)/2pi changes only the "
     "scale (the albedo at normal incidence stays at (n + 1)/(n + 2) = 0.955): docs/models/pumped-up.md.")
 
@@ -417,14 +417,18 @@ for _i, (_base, _corr, _fig) in enumerate([("reciprocal-phong", "max", "3"), ("r
 
 
 @figure("neumann-fig7", "The compact metallic model: albedo for several n, output radiance for n = 100",
-        f"{SRC}, fig. 7", "The albedo function for different n parameters and the output radiance (n = 100) of "
-        "the new model.", exponents=(2, 5, 20, 100, 1000), radiance_n=100)
+        f"{SRC}, fig. 7", "Fig. 7. The albedo function for different n parameters and the output radiance (n = 100) "
+        "of the new model. [Sec. 3.2, eq. 22:] \u201cwhere c_n <= (n + 2)/2\u03c0 must hold in order for the model to "
+        "preserve energy balance.\u201d", exponents=(2, 5, 20, 100, 1000), radiance_n=100)
 def fig7(ctx, exponents, radiance_n):
     specs = {f"neumann-metal n={n:g}": plausible.make("neumann-metal", n=n) for n in exponents}
     th, c = albedo_figure(ctx, "albedo", "Albedo of the compact metallic model", specs)
     for la, v in c.items():
         ctx.measure(f"{la}: max albedo over incidence (energy bound 1)", float(v.max()), at_most=1.0 + 1e-4,
                     note="1e-4 = the integrator's accuracy")
+        ctx.measure(f"{la}: albedo at normal incidence with c_n = (n + 2)/2pi (1: the bound is tight, a larger "
+                    "c_n gains energy there)", float(v[0]), 1.0, 1e-4,
+                    note="at normal incidence max(N.L, N.V) = 1 and the integral is 2 pi / (n + 2) exactly")
     radiance_figure(ctx, "radiance", f"Output radiance of the compact metallic model, n = {radiance_n:g}",
                     {f"n={radiance_n:g}": plausible.make("neumann-metal", n=radiance_n)})
 
