@@ -119,6 +119,7 @@ def test_make_takes_a_spec():
     a = plausible.make("ashikhmin-shirley:nu=10")
     assert a.params["nu"] == 10 and repr(a) == repr(plausible.make("ashikhmin-shirley", nu=10))
     assert plausible.make("ashikhmin-shirley:nu=10", nv=7).params["nv"] == 7
+    assert repr(plausible.make("material:nickel@ngan2005/ward")) == repr(plausible.material("nickel", "ngan2005/ward"))
 
 
 def test_a_typo_in_a_model_name_gets_a_suggestion():

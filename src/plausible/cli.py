@@ -671,13 +671,14 @@ def figures(out, only, spp, resolution, quick, force, list_only):
 @main.command("export")
 @click.argument("model")
 @PARAM_OPT
-@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf"]), default="glsl", show_default=True,
-              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file.")
+@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf", "js"]), default="glsl", show_default=True,
+              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file; "
+                   "js: an ES module for three.js / WebGL2 (GLSL, uniforms' values, tables as textures).")
 @click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
               help="File to write; - writes to standard output.")
 @click.option("--uniforms", is_flag=True, help="glsl: parameters as uniforms instead of constants.")
 @click.option("--prefix", default="plausible", show_default=True, metavar="NAME",
-              help="glsl: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
+              help="glsl, js: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
                    "several exports share one shader.")
 def export_cmd(model, params, fmt, out, uniforms, prefix):
     """Export MODEL as a shader (see docs/export.md)."""

@@ -28,6 +28,7 @@ function of the base) becomes a ``const float`` array in the shader.
 from __future__ import annotations
 
 import copy
+import json
 import math
 import re
 from dataclasses import dataclass, field
@@ -42,8 +43,8 @@ from ..text import fmt
 from ..symbolic import SYM
 from .glsl import P, Emitter, channels3, helpers, literal
 
-__all__ = ["GLSLShader", "Uniform", "brdf_tables", "check_prefix", "slider_range", "to_glsl", "to_brdf",
-           "uniform_params", "write"]
+__all__ = ["FORMATS", "GLSLShader", "Uniform", "brdf_tables", "check_prefix", "slider_range", "to_brdf",
+           "to_glsl", "to_js", "uniform_params", "write"]
 
 #: Parameter kinds that can be uniforms (others change the formula's structure).
 UNIFORM_KINDS = ("scalar", "color")
@@ -440,16 +441,67 @@ def _code_lines(code: str) -> list:
     return out
 
 
+# -- an ES module for three.js and WebGL2 ------------------------------------------------
+
+def to_js(model, prefix: str = "plausible") -> str:
+    """The text of an ES module carrying ``model`` for three.js or plain WebGL2
+    (``examples/three/index.html`` loads it as ``./brdf.js``):
+
+    * ``glsl``: the functions (:func:`to_glsl`, every parameter a uniform,
+      tables as ``sampler2D`` textures);
+    * ``functions``: their names (``{f, pdf, sample}``; ``pdf`` and ``sample``
+      null if the model does not sample);
+    * ``uniforms``: each uniform's initial value, the model's parameter, as an
+      array of 1 or 3 numbers (a uniform left unset would read 0);
+    * ``textures``: each table as ``{width, height, data}``, ``data`` a
+      ``Float32Array`` of ``width x height`` texels (single channel, row by row,
+      for an ``R32F`` texture read without filtering: three.js
+      ``DataTexture(data, width, height, RedFormat, FloatType)``);
+    * ``model``: the model's ``repr``.
+    """
+    shader = to_glsl(model, uniforms=True, prefix=prefix, tables="texture")
+    names = {"f": f"{prefix}_f", "pdf": f"{prefix}_pdf" if shader.sampling else None,
+             "sample": f"{prefix}_sample" if shader.sampling else None}
+    lines = [f"// {shader.model}, exported by plausible: an ES module for three.js / WebGL2 "
+             f"(see docs/export.md and examples/three/index.html).",
+             f"export const model = {json.dumps(shader.model)};",
+             f"export const glsl = {_js_string(shader.text)};",
+             f"export const functions = {json.dumps(names)};",
+             "export const uniforms = {"
+             + ", ".join(f"{json.dumps(u.name)}: [{', '.join(repr(float(x)) for x in u.value)}]"
+                         for u in shader.uniforms) + "};"]
+    tex = []
+    for t in shader.textures:
+        vals = ", ".join(repr(float(x)) for x in t.data)
+        tex.append(f"  {json.dumps(t.name)}: {{width: {t.width}, height: {t.height}, "
+                   f"data: new Float32Array([{vals}])}}")
+    lines.append("export const textures = {" + ("\n" + ",\n".join(tex) + "\n" if tex else "") + "};")
+    return "\n".join(lines) + "\n"
+
+
+def _js_string(text: str) -> str:
+    """``text`` as a JavaScript string literal: a template literal (readable, one
+    line per line of GLSL) where nothing in it needs escaping, else JSON."""
+    if not any(c in text for c in ("`", "\\", "${")):
+        return f"`{text}`"
+    return json.dumps(text)
+
+
+FORMATS = ("glsl", "brdf", "js")
+
+
 def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> str:
-    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path`` (None:
-    no file); returns the text.  ``prefix``: of the GLSL names (:func:`to_glsl`;
-    a ``.brdf`` file holds one model)."""
+    """Export ``model`` as ``fmt`` (``"glsl"``, ``"brdf"`` or ``"js"``) into ``path``
+    (None: no file); returns the text.  ``prefix``: of the GLSL names
+    (:func:`to_glsl`, :func:`to_js`; a ``.brdf`` file holds one model)."""
     if fmt == "glsl":
         text = to_glsl(model, uniforms=uniforms, prefix=prefix).text
     elif fmt == "brdf":
         text = to_brdf(model)
+    elif fmt == "js":
+        text = to_js(model, prefix=prefix)
     else:
-        raise ValueError(f"export format must be 'glsl' or 'brdf', got {fmt!r}")
+        raise ValueError(f"export format must be one of {', '.join(map(repr, FORMATS))}, got {fmt!r}")
     if path is not None:
         Path(path).write_text(text)
     return text
