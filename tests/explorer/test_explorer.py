@@ -349,7 +349,8 @@ def test_the_albedo_axis_covers_the_curves_and_names_the_channel_mean(page):
     assert highest > 1.0 and axis["top"] >= highest and axis["ticks"][-1] >= 1.0
     assert page.locator("#albedo-note").inner_text() == ""           # a grey model: nothing to say
     page.select_option("#model-A", "material")
-    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.albedo", timeout=60_000)
+    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.albedo",
+                           timeout=60_000)
     _idle(page)
     assert "channel mean" in page.locator("#albedo-note").inner_text()
     assert "A: mean of its 3 channels" in page.locator("#albedo-note").inner_text()

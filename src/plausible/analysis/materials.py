@@ -165,4 +165,5 @@ def markdown(rows, only_gains: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["FitCheck", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model", "markdown", "summary"]
+__all__ = ["FitCheck", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model",
+           "markdown", "summary"]

@@ -1,4 +1,5 @@
-"""Export a model as GLSL: a WebGL2/OpenGL function and a Disney BRDF Explorer file.
+"""Export a model as GLSL: a WebGL2/OpenGL function, an ES module for three.js and a
+Disney BRDF Explorer file.
 
 The model's own hooks are traced with the symbolic namespace
 (:mod:`plausible.symbolic`) and printed by :mod:`plausible.export.glsl`, so a
@@ -18,11 +19,20 @@ shader computes the same formula as NumPy and Dr.Jit (to float32 rounding;
   ``vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)``, and an ``isFunc``
   section with the importance sampler.  Its loader drops every line that begins
   with ``#`` (so no preprocessor lines) and compiles with ``#version 410``.
+* :func:`to_js` -- an ES module for three.js and WebGL2: the GLSL with every
+  parameter a uniform and tables as ``R32F`` textures, the uniforms' initial
+  values and the textures' texels (``examples/three/index.html`` renders it).
+
+Several exports share one shader with distinct ``prefix`` es: the helpers
+(``plausible_pow``, ...) are the same in every export and each is guarded by
+``#ifndef``.  Every float the code declares is ``highp``.
 
 What is not a uniform: choices (``fresnel="schlick"``), whole numbers
 (``times``), Lafortune's lobe list and pumped-up's base model change the
 formula itself, so they are always baked in.  Pumped-up's albedo table (a
-function of the base) becomes a ``const float`` array in the shader.
+function of the base) becomes a ``const float`` array in the shader (or a
+texture, ``tables="texture"``; resampled to at most :data:`BRDF_TABLE_LIMIT`
+values in a ``.brdf`` file, with the interpolation error stated).
 """
 
 from __future__ import annotations
