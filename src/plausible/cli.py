@@ -687,9 +687,12 @@ def figures(out, only, spp, resolution, quick, force, list_only):
 @click.option("--prefix", default="plausible", show_default=True, metavar="NAME",
               help="glsl, js: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
                    "several exports share one shader.")
-def export_cmd(model, params, fmt, out, uniforms, prefix):
+@click.option("--table-limit", type=click.IntRange(min=1), default=None, metavar="N",
+              help="brdf: resample tables of more than N values (default 1200; the file states the "
+                   "interpolation error).")
+def export_cmd(model, params, fmt, out, uniforms, prefix, table_limit):
     """Export MODEL as a shader (see docs/export.md)."""
-    from .export import check_prefix, write
+    from .export import BRDF_TABLE_LIMIT, check_prefix, write
 
     try:
         check_prefix(prefix, "--prefix")
@@ -697,7 +700,8 @@ def export_cmd(model, params, fmt, out, uniforms, prefix):
         _fail(str(e))
     m = _model(model, params)
     try:
-        text = write(m, fmt, None if out == "-" else out, uniforms=uniforms, prefix=prefix)
+        text = write(m, fmt, None if out == "-" else out, uniforms=uniforms, prefix=prefix,
+                     table_limit=table_limit or BRDF_TABLE_LIMIT)
     except ValueError as e:
         _fail(str(e))
     except OSError as e:

@@ -33,6 +33,9 @@ Colour bases: ``g`` uses the largest channel of the albedo.  It still satisfies
 eq. 17's lower bound for every channel (so every channel stays energy
 conserving), and it keeps the base's hue.  For a grey base it is the paper's operator.
 
+``times = 0`` is the base itself (no table), times the Fresnel factor: the unpumped
+row of the paper's fig. 8, rendered through the same plugin as the pumped one.
+
 Fresnel: the pumped lobe may be multiplied by a Fresnel factor ``F(L.H)``
 (:func:`plausible.fresnel.weight`; ``L.H = V.H`` keeps it reciprocal, ``F <= 1``
 keeps the albedo ``<= 1``), the way the paper renders its metals (fig. 8).
@@ -287,7 +290,8 @@ class PumpedUp(BxDF):
               doc="g1 = max(a(L), a(V)) (eq. 20), controlled g2 = max(a(L), a(V), N.V, N.L) capping the "
                   "total (eq. 21), or eq. 21 as printed, max(a(L), a(V), (N.V)(N.L)) at every level",
               extremes=("controlled",)),
-        Param("times", 1, 1, 8, integer=True, doc="how many times the operator is applied",
+        Param("times", 1, 0, 8, integer=True, doc="how many times the operator is applied (0: the base, "
+              "times the Fresnel factor)",
               extremes=(3,)),
         Param("fresnel", "none", kind="choice", choices=fresnel.FRESNEL_CHOICES,
               doc="Fresnel factor at L.H multiplied on the pumped lobe"),
@@ -302,7 +306,8 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
-        check_bounded_albedo(base, progress=progress)
+        if self.params["times"] > 0:
+            check_bounded_albedo(base, progress=progress)
         self.tables = []
         level = base
         for t in range(1, self.params["times"] + 1):
