@@ -141,7 +141,9 @@ def _check_row(where, row):
         if not any(w):
             raise ValueError(f"{where}: {name} is the zero vector (a direction needs a non-zero x, y or z)")
     for name, v in zip(names[6:], row[6:]):
-        if v < 0 or v > F_MAX:
+        if v < 0:
+            raise ValueError(f"{where}: column {name} (the BRDF value) must be >= 0, got {v:g}")
+        if v > F_MAX:
             raise ValueError(f"{where}: column {name} (the BRDF value) must lie in [0, {F_MAX:g}] "
                              f"(the metrics square it), got {v:g}")
 
