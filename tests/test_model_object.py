@@ -60,7 +60,11 @@ def test_exported_shader_lists_the_values_the_model_uses():
 
 def test_parameters_survive_pickling_and_json():
     m = plausible.make("modified-phong", kd=[0.1, 0.2, 0.3])
-    assert np.array_equal(pickle.loads(pickle.dumps(m)).params["kd"], [0.1, 0.2, 0.3])
+    back = pickle.loads(pickle.dumps(m))
+    assert np.array_equal(back.params["kd"], [0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match="read-only"):
+        back.params["kd"][0] = 0.9                  # still read-only (and so the p the formulas read)
+    assert back.p.kd is back.params["kd"]
     assert plausible.text.jsonable(m.params) == {"kd": [0.1, 0.2, 0.3], "ks": 0.2, "n": 30.0}
 
 
@@ -106,9 +110,7 @@ def test_degrees_where_radians_are_due_are_refused_with_the_fix():
 
 def test_albedo_curve_takes_degrees_by_name():
     m = plausible.make("modified-phong", kd=0.3, ks=0.5, n=20)
-    # NumPy: bitwise reproducible (Dr.Jit's quadrature sums with atomic adds, whose
-    # order, and so the last bits, vary from run to run)
-    with plausible.use_backend("numpy"):
+    with plausible.use_backend("numpy"):        # one backend: the same integrals bit for bit
         a = plausible.albedo_curve(m, thetas_deg=[0, 30, 60], phi_deg=45)
         b = plausible.albedo_curve(m, np.radians([0, 30, 60]), math.radians(45))
     assert np.array_equal(a.value, b.value)
@@ -122,6 +124,7 @@ def test_make_takes_a_spec():
     a = plausible.make("ashikhmin-shirley:nu=10")
     assert a.params["nu"] == 10 and repr(a) == repr(plausible.make("ashikhmin-shirley", nu=10))
     assert plausible.make("ashikhmin-shirley:nu=10", nv=7).params["nv"] == 7
+    assert repr(plausible.make("material:nickel@ngan2005/ward")) == repr(plausible.material("nickel", "ngan2005/ward"))
 
 
 def test_a_typo_in_a_model_name_gets_a_suggestion():

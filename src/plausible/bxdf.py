@@ -238,11 +238,20 @@ class Params(dict):
     __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _refuse
 
     def __reduce__(self):
-        return (Params, (dict(self),))
+        return (_unpickled_params, (dict(self),))
 
     def copy(self) -> dict:
         """A plain (mutable) ``dict`` of the parameters."""
         return dict(self)
+
+
+def _unpickled_params(values: dict) -> Params:
+    """:class:`Params` of an unpickled model, its arrays read-only again (pickle
+    restores arrays writable; the model's ``p`` shares these objects)."""
+    for v in values.values():
+        if isinstance(v, np.ndarray):
+            v.flags.writeable = False
+    return Params(values)
 
 
 def _frozen(v):

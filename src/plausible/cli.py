@@ -470,7 +470,7 @@ def _print_report(rep):
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
-        style = "green" if row[3] == "PASS" else "red"
+        style = {"PASS": "green", "UNRESOLVED": "yellow"}.get(row[3], "red")
         style = "yellow" if row[3] == "N/A" else style
         t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)
@@ -618,11 +618,14 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
 
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
+    bad = []
     try:
         todo = batch.plan(targets, models_, metrics_, out=out, seed=seed, starts=starts,
-                          time_limit=time_limit, retry_failed=retry_failed)
+                          time_limit=time_limit, retry_failed=retry_failed, problems=bad)
     except ValueError as e:
         _fail(str(e))
+    for b in bad:       # malformed rows: skipped (their fits run again), the good rows kept
+        console.print(f"[yellow]skipped a malformed row[/yellow] {escape(b)}", soft_wrap=True)
     failed = [0]
 
     def on_result(row):
@@ -642,6 +645,10 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
         console.print(f"[yellow]interrupted[/yellow]: the finished fits are in {escape(out)}; "
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
+    except ValueError as e:     # the folder cannot be written (read-only, disk full): what is kept, how to resume
+        _fail(str(e))
+    if s.shared:
+        console.print(f"{s.shared} fits left to another run on {escape(out)}", soft_wrap=True)
     if s.dashboard:
         console.print(f"Dask dashboard: {s.dashboard}")
     console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "
@@ -746,17 +753,21 @@ def figures(out, only, spp, resolution, quick, force, list_only):
 @main.command("export")
 @click.argument("model")
 @PARAM_OPT
-@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf"]), default="glsl", show_default=True,
-              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file.")
+@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf", "js"]), default="glsl", show_default=True,
+              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file; "
+                   "js: an ES module for three.js / WebGL2 (GLSL, uniforms' values, tables as textures).")
 @click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
               help="File to write; - writes to standard output.")
 @click.option("--uniforms", is_flag=True, help="glsl: parameters as uniforms instead of constants.")
 @click.option("--prefix", default="plausible", show_default=True, metavar="NAME",
-              help="glsl: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
+              help="glsl, js: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
                    "several exports share one shader.")
-def export_cmd(model, params, fmt, out, uniforms, prefix):
+@click.option("--table-limit", type=click.IntRange(min=1), default=None, metavar="N",
+              help="brdf: resample tables of more than N values (default 1200; the file states the "
+                   "interpolation error).")
+def export_cmd(model, params, fmt, out, uniforms, prefix, table_limit):
     """Export MODEL as a shader (see docs/export.md)."""
-    from .export import check_prefix, write
+    from .export import BRDF_TABLE_LIMIT, check_prefix, write
 
     try:
         check_prefix(prefix, "--prefix")
@@ -764,7 +775,8 @@ def export_cmd(model, params, fmt, out, uniforms, prefix):
         _fail(str(e))
     m = _model(model, params)
     try:
-        text = write(m, fmt, None if out == "-" else out, uniforms=uniforms, prefix=prefix)
+        text = write(m, fmt, None if out == "-" else out, uniforms=uniforms, prefix=prefix,
+                     table_limit=table_limit or BRDF_TABLE_LIMIT)
     except ValueError as e:
         _fail(str(e))
     except OSError as e:

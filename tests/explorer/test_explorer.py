@@ -26,7 +26,7 @@ from plausible.explorer.app import create_app  # noqa: E402
 
 @pytest.fixture(scope="module")
 def client():
-    return TestClient(create_app())
+    return TestClient(create_app(), base_url="http://127.0.0.1")
 
 
 def test_models_lists_every_registered_model(client):
@@ -319,6 +319,7 @@ def test_a_refused_parameter_set_goes_back_to_the_last_valid_one(page):
     page.wait_for_timeout(300)
     _idle(page)
     assert page.evaluate("window.explorer.data.A.asked.params.n") == 12
+    before = _sphere(page)
     # a colour slider to full brightness: kd = 1 with ks = 0.2 breaks kd + ks <= 1
     page.locator("#params-A [data-param=kd] input[type=range]").fill("1")
     page.wait_for_timeout(300)
@@ -333,6 +334,7 @@ def test_a_refused_parameter_set_goes_back_to_the_last_valid_one(page):
     assert page.evaluate("window.explorer.data.A.asked.params") == params   # the plots show those values
     slider = float(page.locator("#params-A [data-param=kd] input[type=range]").input_value())
     assert slider == pytest.approx(0.5, abs=1e-3)                   # the control shows them too
+    assert _sphere(page) == before                                  # and the sphere
     want = views.plane(plausible.make("modified-phong", n=12), page.evaluate("window.explorer.thetaI"))["fcos"]
     assert np.allclose(page.evaluate("window.explorer.data.A.plane.fcos"), want, rtol=1e-12)
 
@@ -347,7 +349,8 @@ def test_the_albedo_axis_covers_the_curves_and_names_the_channel_mean(page):
     assert highest > 1.0 and axis["top"] >= highest and axis["ticks"][-1] >= 1.0
     assert page.locator("#albedo-note").inner_text() == ""           # a grey model: nothing to say
     page.select_option("#model-A", "material")
-    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.albedo", timeout=60_000)
+    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.albedo",
+                           timeout=60_000)
     _idle(page)
     assert "channel mean" in page.locator("#albedo-note").inner_text()
     assert "A: mean of its 3 channels" in page.locator("#albedo-note").inner_text()

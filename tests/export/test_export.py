@@ -235,3 +235,36 @@ def test_brdf_tables_fit_the_limit():
     assert m.tables[0].size <= 1200 and len(notes) == 1 and "12705 values" in notes[0]
     same, none = brdf_tables(SimpleNamespace(tables=[big]), 20000)
     assert same.tables[0] is big and none == []
+
+
+def test_the_js_module_carries_every_uniform_and_the_tables_as_textures(tmp_path):
+    """``--format js``: each uniform's value is the model's parameter (none left to
+    read 0), each table's texels are its values (float32, row by row, zero padded)."""
+    import json
+
+    m = plausible.make("pumped-up", rs=[0.9, 0.8, 0.7])
+    out = tmp_path / "brdf.js"
+    r = CliRunner().invoke(main, ["export", "pumped-up", "-p", "rs=0.9,0.8,0.7", "--format", "js",
+                                  "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    text = out.read_text()
+    assert text == plausible.export.to_js(m)
+    uni = json.loads(re.search(r"export const uniforms = (\{.*\});", text).group(1))
+    assert uni == {"plausible_rs": [0.9, 0.8, 0.7]}
+    w, h, data = re.search(r'"plausible_table0": \{width: (\d+), height: (\d+), data: new Float32Array\(\[(.*?)\]\)',
+                           text).groups()
+    vals = np.array([float(x) for x in data.split(",")])
+    table = m.tables[0]._padded
+    assert int(w) * int(h) == len(vals) >= len(table)
+    assert np.array_equal(vals[:len(table)], table.astype(np.float32)) and not vals[len(table):].any()
+    assert "uniform highp sampler2D plausible_table0;" in text and "const highp float" not in text
+
+
+def test_cli_table_limit_resamples_the_brdf_table_and_refuses_too_small_a_limit():
+    r = CliRunner().invoke(main, ["export", "pumped-up", "--format", "brdf", "--table-limit", "20", "--out", "-"])
+    assert r.exit_code == 0, r.output
+    parsed = brdf_file.parse(r.stdout)
+    assert "const highp float plausible_table0[20]" in parsed["sections"]["shader"]
+    assert "resampled from 91 nodes (93 values) to 18 (20 values)" in r.stdout
+    r = CliRunner().invoke(main, ["export", "pumped-up", "--format", "brdf", "--table-limit", "4", "--out", "-"])
+    assert r.exit_code == 2 and "too small for a table of 91 nodes: it needs at least 5 values" in r.output

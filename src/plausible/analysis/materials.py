@@ -252,5 +252,5 @@ def write_tables(rows, out) -> list[Path]:
     return written
 
 
-__all__ = ["FitCheck", "QUICK_TOL", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model",
-           "default_jobs", "markdown", "summary", "work_list", "write_tables"]
+__all__ = ["FitCheck", "QUICK_TOL", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits",
+           "check_model", "default_jobs", "markdown", "summary", "work_list", "write_tables"]

@@ -1,4 +1,5 @@
-"""Export a model as GLSL: a WebGL2/OpenGL function and a Disney BRDF Explorer file.
+"""Export a model as GLSL: a WebGL2/OpenGL function, an ES module for three.js and a
+Disney BRDF Explorer file.
 
 The model's own hooks are traced with the symbolic namespace
 (:mod:`plausible.symbolic`) and printed by :mod:`plausible.export.glsl`, so a
@@ -18,16 +19,26 @@ shader computes the same formula as NumPy and Dr.Jit (to float32 rounding;
   ``vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)``, and an ``isFunc``
   section with the importance sampler.  Its loader drops every line that begins
   with ``#`` (so no preprocessor lines) and compiles with ``#version 410``.
+* :func:`to_js` -- an ES module for three.js and WebGL2: the GLSL with every
+  parameter a uniform and tables as ``R32F`` textures, the uniforms' initial
+  values and the textures' texels (``examples/three/index.html`` renders it).
+
+Several exports share one shader with distinct ``prefix`` es: the helpers
+(``plausible_pow``, ...) are the same in every export and each is guarded by
+``#ifndef``.  Every float the code declares is ``highp``.
 
 What is not a uniform: choices (``fresnel="schlick"``), whole numbers
 (``times``), Lafortune's lobe list and pumped-up's base model change the
 formula itself, so they are always baked in.  Pumped-up's albedo table (a
-function of the base) becomes a ``const float`` array in the shader.
+function of the base) becomes a ``const float`` array in the shader (or a
+texture, ``tables="texture"``; resampled to at most :data:`BRDF_TABLE_LIMIT`
+values in a ``.brdf`` file, with the interpolation error stated).
 """
 
 from __future__ import annotations
 
 import copy
+import json
 import math
 import re
 from dataclasses import dataclass, field
@@ -42,8 +53,8 @@ from ..text import fmt
 from ..symbolic import SYM
 from .glsl import P, Emitter, channels3, helpers, literal
 
-__all__ = ["GLSLShader", "Uniform", "brdf_tables", "check_prefix", "slider_range", "to_glsl", "to_brdf",
-           "uniform_params", "write"]
+__all__ = ["FORMATS", "GLSLShader", "Uniform", "brdf_tables", "check_prefix", "slider_range", "to_brdf",
+           "to_glsl", "to_js", "uniform_params", "write"]
 
 #: Parameter kinds that can be uniforms (others change the formula's structure).
 UNIFORM_KINDS = ("scalar", "color")
@@ -324,6 +335,11 @@ def _num(x: float) -> str:
     return repr(float(x))
 
 
+def grid_text(t) -> str:
+    """``"361 x 32"`` (polar x azimuth nodes) or ``"91"`` (isotropic) of an AngleTable."""
+    return f"{t.n_theta} x {t.n_phi}" if t.n_phi else f"{t.n_theta}"
+
+
 def brdf_tables(model, limit: int = BRDF_TABLE_LIMIT):
     """``(model, notes)``: ``model`` itself when its tables (pumped-up's albedo
     tables, :class:`~plausible.tables.AngleTable`) hold at most ``limit`` values
@@ -348,10 +364,13 @@ def brdf_tables(model, limit: int = BRDF_TABLE_LIMIT):
             err = t.difference(c)
             if best is None or err < best[0]:
                 best = (err, c)
+        if best is None:
+            least = 5 if t.isotropic else 5 * 7
+            raise ValueError(f"a table limit of {limit} values is too small for a table of {grid_text(t)} nodes: "
+                             f"it needs at least {least} values (3 polar nodes{'' if t.isotropic else ' x 4 azimuths'})")
         err, c = best
-        grid = lambda a: f"{a.n_theta} x {a.n_phi}" if a.n_phi else f"{a.n_theta}"  # noqa: E731
-        notes.append(f"albedo table {len(new)} resampled from {grid(t)} nodes ({t.size} values) to "
-                     f"{grid(c)} ({c.size} values): interpolation error at most {_ceil2(err):.2g} relative "
+        notes.append(f"albedo table {len(new)} resampled from {grid_text(t)} nodes ({t.size} values) to "
+                     f"{grid_text(c)} ({c.size} values): interpolation error at most {_ceil2(err):.2g} relative "
                      f"to the albedo (at the fine nodes and between them), and so to f, which divides by "
                      f"it; plausible export --format glsl or js keeps the full table")
         new.append(c)
@@ -385,6 +404,8 @@ def to_brdf(model, table_limit: int = BRDF_TABLE_LIMIT) -> str:
     world space, ``vec3 sampleBRDF(vec3 V, vec3 u, vec3 N, vec3 X, vec3 Y,
     out vec3 weight, out float pdf)``.
     """
+    if isinstance(table_limit, bool) or not isinstance(table_limit, int) or table_limit < 1:
+        raise ValueError(f"table_limit must be a positive whole number of table values, got {table_limit!r}")
     model, notes = brdf_tables(model, table_limit)
     wide = [p.name for p in type(model).PARAMS if p.kind == "color" and p.hi > 1.0]
     shader = to_glsl(model, uniforms=True, names=lambda n: n, split_colours=wide)
@@ -440,16 +461,69 @@ def _code_lines(code: str) -> list:
     return out
 
 
-def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> str:
-    """Export ``model`` as ``fmt`` (``"glsl"`` or ``"brdf"``) into ``path`` (None:
-    no file); returns the text.  ``prefix``: of the GLSL names (:func:`to_glsl`;
-    a ``.brdf`` file holds one model)."""
+# -- an ES module for three.js and WebGL2 ------------------------------------------------
+
+def to_js(model, prefix: str = "plausible") -> str:
+    """The text of an ES module carrying ``model`` for three.js or plain WebGL2
+    (``examples/three/index.html`` loads it as ``./brdf.js``):
+
+    * ``glsl``: the functions (:func:`to_glsl`, every parameter a uniform,
+      tables as ``sampler2D`` textures);
+    * ``functions``: their names (``{f, pdf, sample}``; ``pdf`` and ``sample``
+      null if the model does not sample);
+    * ``uniforms``: each uniform's initial value, the model's parameter, as an
+      array of 1 or 3 numbers (a uniform left unset would read 0);
+    * ``textures``: each table as ``{width, height, data}``, ``data`` a
+      ``Float32Array`` of ``width x height`` texels (single channel, row by row,
+      for an ``R32F`` texture read without filtering: three.js
+      ``DataTexture(data, width, height, RedFormat, FloatType)``);
+    * ``model``: the model's ``repr``.
+    """
+    shader = to_glsl(model, uniforms=True, prefix=prefix, tables="texture")
+    names = {"f": f"{prefix}_f", "pdf": f"{prefix}_pdf" if shader.sampling else None,
+             "sample": f"{prefix}_sample" if shader.sampling else None}
+    lines = [f"// {shader.model}, exported by plausible: an ES module for three.js / WebGL2 "
+             f"(see docs/export.md and examples/three/index.html).",
+             f"export const model = {json.dumps(shader.model)};",
+             f"export const glsl = {_js_string(shader.text)};",
+             f"export const functions = {json.dumps(names)};",
+             "export const uniforms = {"
+             + ", ".join(f"{json.dumps(u.name)}: [{', '.join(repr(float(x)) for x in u.value)}]"
+                         for u in shader.uniforms) + "};"]
+    tex = []
+    for t in shader.textures:
+        vals = ", ".join(repr(float(x)) for x in t.data)
+        tex.append(f"  {json.dumps(t.name)}: {{width: {t.width}, height: {t.height}, "
+                   f"data: new Float32Array([{vals}])}}")
+    lines.append("export const textures = {" + ("\n" + ",\n".join(tex) + "\n" if tex else "") + "};")
+    return "\n".join(lines) + "\n"
+
+
+def _js_string(text: str) -> str:
+    """``text`` as a JavaScript string literal: a template literal (readable, one
+    line per line of GLSL) where nothing in it needs escaping, else JSON."""
+    if not any(c in text for c in ("`", "\\", "${")):
+        return f"`{text}`"
+    return json.dumps(text)
+
+
+FORMATS = ("glsl", "brdf", "js")
+
+
+def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible",
+          table_limit: int = BRDF_TABLE_LIMIT) -> str:
+    """Export ``model`` as ``fmt`` (``"glsl"``, ``"brdf"`` or ``"js"``) into ``path``
+    (None: no file); returns the text.  ``prefix``: of the GLSL names
+    (:func:`to_glsl`, :func:`to_js`; a ``.brdf`` file holds one model);
+    ``table_limit``: of a ``.brdf`` file's tables (:func:`to_brdf`)."""
     if fmt == "glsl":
         text = to_glsl(model, uniforms=uniforms, prefix=prefix).text
     elif fmt == "brdf":
-        text = to_brdf(model)
+        text = to_brdf(model, table_limit=table_limit)
+    elif fmt == "js":
+        text = to_js(model, prefix=prefix)
     else:
-        raise ValueError(f"export format must be 'glsl' or 'brdf', got {fmt!r}")
+        raise ValueError(f"export format must be one of {', '.join(map(repr, FORMATS))}, got {fmt!r}")
     if path is not None:
         Path(path).write_text(text)
     return text
