@@ -395,7 +395,7 @@ def _print_report(rep):
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
-        style = "green" if row[3] == "PASS" else "red"
+        style = {"PASS": "green", "UNRESOLVED": "yellow"}.get(row[3], "red")
         style = "yellow" if row[3] == "N/A" else style
         t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)
@@ -543,11 +543,14 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
 
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
+    bad = []
     try:
         todo = batch.plan(targets, models_, metrics_, out=out, seed=seed, starts=starts,
-                          time_limit=time_limit, retry_failed=retry_failed)
+                          time_limit=time_limit, retry_failed=retry_failed, problems=bad)
     except ValueError as e:
         _fail(str(e))
+    for b in bad:       # malformed rows: skipped (their fits run again), the good rows kept
+        console.print(f"[yellow]skipped a malformed row[/yellow] {escape(b)}", soft_wrap=True)
     failed = [0]
 
     def on_result(row):
@@ -567,6 +570,10 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
         console.print(f"[yellow]interrupted[/yellow]: the finished fits are in {escape(out)}; "
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
+    except ValueError as e:     # the folder cannot be written (read-only, disk full): what is kept, how to resume
+        _fail(str(e))
+    if s.shared:
+        console.print(f"{s.shared} fits left to another run on {escape(out)}", soft_wrap=True)
     if s.dashboard:
         console.print(f"Dask dashboard: {s.dashboard}")
     console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "

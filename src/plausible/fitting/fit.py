@@ -95,7 +95,7 @@ def load_table(path):
     """
     rows, width, header = [], None, False
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:     # (a byte-order mark is not part of the first row)
             for ln, line in enumerate(fh, 1):
                 s = line.split("#", 1)[0].strip()
                 if not s:
@@ -127,6 +127,8 @@ def load_table(path):
 
 
 _COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
+#: Largest BRDF value a table may hold: its square (the least-squares metrics) stays finite.
+F_MAX = 1e150
 
 
 def _check_row(where, row):
@@ -141,6 +143,9 @@ def _check_row(where, row):
     for name, v in zip(names[6:], row[6:]):
         if v < 0:
             raise ValueError(f"{where}: column {name} (the BRDF value) must be >= 0, got {v:g}")
+        if v > F_MAX:
+            raise ValueError(f"{where}: column {name} (the BRDF value) must lie in [0, {F_MAX:g}] "
+                             f"(the metrics square it), got {v:g}")
 
 
 def _clip(text, n=60):
@@ -172,6 +177,12 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
         return as_target(registry.make_from_spec(target.strip()), thetas_deg=thetas_deg)
     if isinstance(target, (str, Path)):
         p = Path(target)
+        if p.is_dir():     # a folder is never a target; a name that is also a model spec is the model
+            try:
+                return as_target(registry.make_from_spec(str(target)), thetas_deg=thetas_deg)
+            except ValueError:
+                raise ValueError(f"target {str(target)!r} is a folder; a target is a model spec (name:k=v), "
+                                 f"material:NAME@FIT, a MERL .binary file or a CSV table") from None
         if not p.exists() and (p.suffix.lower() in (".csv", ".binary", ".txt") or "/" in str(target)):
             raise ValueError(f"target file {str(target)!r} not found")
         if p.exists():

@@ -62,6 +62,7 @@ from .. import fresnel, vec
 from ..bxdf import BxDF, above
 from ..params import Param
 from ..registry import register
+from ..registry import spec_of as registry_spec_of
 
 #: Tables built in this process: key -> AngleTable.
 _TABLES: dict = {}
@@ -109,8 +110,28 @@ class ModelParam(Param):
 
 
 def spec_of(model) -> str:
-    """A canonical text of a model and its parameters (the cache key)."""
+    """A canonical text of a model and its parameters (the cache key): the
+    registry's spec string, whose floats are exact (``repr``), else the class and
+    its parameters at full precision.  Not ``repr(model)``: it prints 6
+    significant digits, so ``n=20`` and ``n=20.00004`` shared a table."""
+    if getattr(model, "info", None) is not None:
+        return registry_spec_of(model)
+    params = getattr(model, "params", None)
+    if isinstance(params, dict):
+        return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
+            f"{k}={_exact(v)}" for k, v in params.items()) + ")"
     return repr(model)
+
+
+def _exact(v) -> str:
+    """A parameter value as text that tells apart any two different values."""
+    if isinstance(v, BxDF):
+        return "[" + spec_of(v) + "]"
+    if isinstance(v, np.ndarray):
+        return repr(v.astype(np.float64).tolist())
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_exact(x) for x in v) + ")"
+    return repr(float(v)) if isinstance(v, float) else repr(v)
 
 
 @lru_cache(maxsize=None)
