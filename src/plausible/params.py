@@ -51,6 +51,10 @@ class Param:
             if value not in self.choices:
                 raise ValueError(f"{where} must be one of {self.range_text()}, got {value!r}")
             return value
+        if isinstance(value, (bool, np.bool_)) or (isinstance(value, (list, tuple)) and
+                                                   any(isinstance(x, (bool, np.bool_)) for x in value)):
+            raise ValueError(f"{where} must be a number in {self.range_text()}, got {value!r} "
+                             f"(a boolean is not a number)")
         if self.kind == "color":
             try:
                 arr = np.asarray(value, dtype=np.float64)
@@ -60,6 +64,9 @@ class Param:
             if arr.ndim > 1 or arr.size == 0:
                 raise ValueError(f"{where} must be a scalar or a 1-D channel array "
                                  f"(e.g. RGB), got shape {arr.shape}")
+            if arr.ndim == 1 and arr.size not in COLOR_CHANNELS:
+                raise ValueError(f"{where} must be a number or {' or '.join(map(str, COLOR_CHANNELS))} "
+                                 f"channels (grey or RGB), got {arr.size} channels")
             if not np.all(np.isfinite(arr)) or np.any(arr < self.lo) or np.any(arr > self.hi):
                 raise ValueError(f"{where} must lie in {self.range_text()}, got {value!r}")
             return float(arr) if arr.ndim == 0 else arr
@@ -75,6 +82,10 @@ class Param:
                 raise ValueError(f"{where} must be an integer in {self.range_text()}, got {value!r}")
             return int(x)
         return x
+
+
+#: Channel counts a colour parameter may have (grey, RGB).
+COLOR_CHANNELS = (1, 3)
 
 
 @dataclass(frozen=True)

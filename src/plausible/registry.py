@@ -100,14 +100,24 @@ def parse_assignments(items) -> dict:
     return out
 
 
+#: Deepest nesting of model specs in square brackets (``pumped-up:base=[pumped-up:base=[...]]``):
+#: the work of building a nested pumped-up model grows with the cube of the depth (each
+#: level tabulates the albedo of the one below), and Python's recursion ends at ~200.
+MAX_SPEC_DEPTH = 4
+
+
 def split_spec(spec: str) -> list[str]:
     """Split ``"name:k=v:k=[name2:k=v]"`` at the colons outside square brackets
     (a bracketed value is a nested spec, e.g. the base of ``pumped-up``); the
-    brackets are removed."""
+    brackets are removed.  At most :data:`MAX_SPEC_DEPTH` levels of brackets."""
     parts, depth, cur = [], 0, ""
     for ch in spec:
         if ch == "[":
             depth += 1
+            if depth > MAX_SPEC_DEPTH:
+                raise ValueError(f"model spec nests more than {MAX_SPEC_DEPTH} levels of '[...]' "
+                                 f"(at most {MAX_SPEC_DEPTH} allowed): {spec[:80]!r}"
+                                 + ("..." if len(spec) > 80 else ""))
             if depth == 1:
                 continue
         elif ch == "]":

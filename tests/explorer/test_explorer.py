@@ -26,7 +26,7 @@ from plausible.explorer.app import create_app  # noqa: E402
 
 @pytest.fixture(scope="module")
 def client():
-    return TestClient(create_app())
+    return TestClient(create_app(), base_url="http://127.0.0.1")
 
 
 def test_models_lists_every_registered_model(client):

@@ -258,3 +258,13 @@ def test_the_js_module_carries_every_uniform_and_the_tables_as_textures(tmp_path
     assert int(w) * int(h) == len(vals) >= len(table)
     assert np.array_equal(vals[:len(table)], table.astype(np.float32)) and not vals[len(table):].any()
     assert "uniform highp sampler2D plausible_table0;" in text and "const highp float" not in text
+
+
+def test_cli_table_limit_resamples_the_brdf_table_and_refuses_too_small_a_limit():
+    r = CliRunner().invoke(main, ["export", "pumped-up", "--format", "brdf", "--table-limit", "20", "--out", "-"])
+    assert r.exit_code == 0, r.output
+    parsed = brdf_file.parse(r.stdout)
+    assert "const highp float plausible_table0[20]" in parsed["sections"]["shader"]
+    assert "resampled from 91 nodes (93 values) to 18 (20 values)" in r.stdout
+    r = CliRunner().invoke(main, ["export", "pumped-up", "--format", "brdf", "--table-limit", "4", "--out", "-"])
+    assert r.exit_code == 2 and "too small for a table of 91 nodes: it needs at least 5 values" in r.output

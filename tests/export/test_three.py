@@ -298,3 +298,10 @@ def test_the_docs_plain_webgl2_function_sets_every_uniform_and_table(page):
         len(wi), -1), (len(wi), 3))
     assert [relative_errors(g, ref(m)).max() <= RTOL for g, m in zip(got, models)] == [True, True]
     assert relative_errors(got[0], ref(models[2])).max() > 10 * RTOL
+
+
+def test_make_installs_the_three_js_version_of_the_page():
+    """``make three`` pins the version the page's import map loads (else the test
+    would skip, or serve another three.js than the page names)."""
+    pinned = re.search(r"^THREE_VERSION\s*:=\s*(\S+)", (ROOT / "Makefile").read_text(), re.M).group(1)
+    assert f"three@{pinned}/" in cdn_prefix()

@@ -146,3 +146,122 @@ def test_report_writes_bounds_and_booleans_as_text(tmp_path):
                                             measurements=ctx.measurements)}).read_text()
     assert "&ge; 0.25, &le; 1" in html
     assert "<td>no</td><td>yes</td>" in html and "DOES NOT HOLD" in html
+
+
+# -- fireflies ----------------------------------------------------------------------
+
+def test_hot_pixels_finds_injected_fireflies_and_not_image_features():
+    """The issue's definition (luminance > 4 x the 3x3 median + 0.5): a smooth image has
+    none; one and two injected fireflies are found; the four corners of a bright square
+    pass the luminance test (their 3x3 median is dark) but have three bright neighbours,
+    so they are not isolated."""
+    from plausible.figures.scenes import count_hot_pixels, hot_pixels
+
+    y, x = np.mgrid[0:40, 0:50]
+    img = np.repeat((0.2 + 0.01 * x + 0.005 * y)[..., None], 3, axis=-1)
+    assert count_hot_pixels(img) == 0
+    fire = img.copy()
+    fire[10, 10] = 20.0
+    assert count_hot_pixels(fire) == 1 and hot_pixels(fire)[10, 10]
+    fire[30, 40] = fire[30, 41] = 5.0          # two touching: 5 > 4 x 0.6 + 0.5
+    assert count_hot_pixels(fire) == 3
+    weak = img.copy()
+    weak[10, 10] = 4 * weak[10, 10, 0] + 0.4   # below the threshold
+    assert count_hot_pixels(weak) == 0
+    square = np.zeros((40, 40, 3)) + 0.05
+    square[10:20, 10:20] = 15.0
+    assert count_hot_pixels(square, isolated=False) == 4 and count_hot_pixels(square) == 0
+
+
+def test_lamp_has_the_intensity_of_the_point_light_it_replaces():
+    """A sphere of radius r and radiance L has intensity L pi r^2 (W/sr) in every direction."""
+    import math
+
+    from plausible.figures.scenes import lamp
+
+    d = lamp([1.0, 2.0, 3.0], 90.0, radius=2.0)
+    assert d["emitter"]["radiance"]["value"] * math.pi * 4.0 == pytest.approx(90.0, rel=1e-12)
+    assert d["center"] == [1.0, 2.0, 3.0] and d["radius"] == 2.0
+
+
+@pytest.mark.drjit
+def test_tilted_plane_furnace_shows_the_albedo_at_the_rim():
+    """A&S fig. 2's furnace away from the centre: a flat patch of nu = nv = 10 seen at
+    80 deg in the unit furnace reads the directional albedo there (0.539, 4 s.e.), and
+    not that of nu = nv = 100 (the check fails on the wrong model)."""
+    import math
+
+    pytest.importorskip("mitsuba")
+    import plausible
+    from plausible.analysis import albedo, direction
+    from plausible.figures import scenes as S
+    from plausible.figures.paper_as import as_bsdf, tilted_plane_furnace
+
+    mi = S.mitsuba()
+    img = S.render(mi, tilted_plane_furnace(mi, as_bsdf(10, 10, 1.0, 0.0), 80.0, 16, 64), seed=3)
+    px = img.mean(axis=-1).ravel()
+    got, se = px.mean(), px.std(ddof=1) / math.sqrt(px.size)
+    right = float(albedo(plausible.make("ashikhmin-shirley", nu=10, nv=10, rs=1.0, rd=0.0),
+                         direction(math.radians(80.0))))
+    wrong = float(albedo(plausible.make("ashikhmin-shirley", nu=100, nv=100, rs=1.0, rd=0.0),
+                         direction(math.radians(80.0))))
+    assert right == pytest.approx(0.539, abs=5e-4)
+    assert abs(got - right) <= 4 * se, (got, se, right)
+    assert abs(got - wrong) > 4 * se, (got, se, wrong)
+
+
+def test_report_lists_image_size_and_samples_only_for_renders(tmp_path):
+    from plausible.figures.report import write_index
+
+    figs = {"plot": dict(title="p", status="ok", items=[], params=dict(n=20), resolution=320, spp=128,
+                         renders=False),
+            "render": dict(title="r", status="ok", items=[], params=dict(n=5), resolution=320, spp=128,
+                           renders=True)}
+    html = write_index(tmp_path, figs).read_text()
+    plot, render = html.split("<h2 id='render'>")
+    assert "spp = 128" not in plot and "n = 20" in plot
+    assert "spp = 128" in render and "resolution = 320" in render
+
+
+def test_a_hot_pixel_counts_unless_it_is_hot_again_at_another_seed(tmp_path):
+    """Context.image's firefly check: a hot pixel whose neighbourhood, rendered again
+    (here: given), shows it hot again is a glint, not counted; one that vanishes is a
+    firefly and fails the check."""
+    pytest.importorskip("mitsuba")
+    img = np.full((20, 20, 3), 0.3)
+    img[5, 12] = 9.0
+    ctx = Context(tmp_path)
+
+    def glint(y0, x0, h, w):
+        return img[y0:y0 + h, x0:x0 + w]
+
+    def clean(y0, x0, h, w):
+        return np.full((h, w, 3), 0.3)
+
+    ok = ctx.image("a", img, rerender=glint)
+    assert ctx.measurements[-1]["ok"] is True and ctx.measurements[-1]["measured"] == 0
+    assert "as bright again" in ctx.measurements[-1]["note"]
+    ctx.image("b", img, rerender=clean)
+    assert ctx.measurements[-1]["ok"] is False and ctx.measurements[-1]["measured"] == 1
+    ctx.image("c", img)
+    assert ctx.measurements[-1]["measured"] == 1
+    assert ok.shape == img.shape
+
+
+def test_perceptual_checks_hold_when_the_perceptual_fit_wins_and_fail_otherwise():
+    from plausible.figures.paper_neumann import perceptual_checks
+
+    ls = {"albedo_max": 0.48, "perceptual": 5.18}
+    pc = {"albedo_max": 0.16, "perceptual": 4.74}   # docs/fitting.md's neumann-metal rows
+    assert all(_ok(q) for q in perceptual_checks(ls, pc))
+    assert not any(_ok(q) for q in perceptual_checks(pc, ls))
+
+
+def test_a_curve_that_badly_decreases_passes_and_one_that_diverges_fails():
+    """Phong and He-Torrance: falling to a constant (slope 0) or to 0 (He-Torrance:
+    a ~ cos^0.075 measured) passes; growing like 1/sqrt(cos) fails."""
+    c = np.array(RATE_COS)
+    falling = _curve(1.0, 0.1) * np.where(TH > 89, 0.1, 1.0)
+    for label in ("Phong (n = 150)", "He-Torrance (sigma0 = 0.1, tau = 1.7)"):
+        assert all(_ok(q) for q in rate_checks(label, falling, TH, 0.004 * c ** 0.075))
+        assert not all(_ok(q) for q in rate_checks(label, falling, TH, 0.004 / np.sqrt(c)))

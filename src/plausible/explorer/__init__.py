@@ -16,11 +16,12 @@ from .views import (albedo, build, export, half_diff_slice, lobe3d, model_catalo
                     verdict)
 
 
-def create_app():
-    """The FastAPI application (imported lazily: FastAPI is the ``explore`` extra)."""
+def create_app(host=None, port=None):
+    """The FastAPI application (imported lazily: FastAPI is the ``explore`` extra);
+    ``host``, ``port``: the address served (see :func:`plausible.explorer.app.create_app`)."""
     from .app import create_app as _create
 
-    return _create()
+    return _create(host, port)
 
 
 def bind(host: str = "127.0.0.1", port: int = 8765):
@@ -59,7 +60,9 @@ def serve(host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True, 
     sock = sock if sock is not None else bind(host, port)
     if open_browser:
         threading.Timer(1.0, lambda: webbrowser.open(url_of(host, port))).start()
-    server = uvicorn.Server(uvicorn.Config(create_app(), host=host, port=port, log_level="warning"))
+    from .app import server_config
+
+    server = uvicorn.Server(server_config(create_app(host, port), host, port))
     server.run(sockets=[sock])
 
 

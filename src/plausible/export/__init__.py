@@ -335,6 +335,11 @@ def _num(x: float) -> str:
     return repr(float(x))
 
 
+def grid_text(t) -> str:
+    """``"361 x 32"`` (polar x azimuth nodes) or ``"91"`` (isotropic) of an AngleTable."""
+    return f"{t.n_theta} x {t.n_phi}" if t.n_phi else f"{t.n_theta}"
+
+
 def brdf_tables(model, limit: int = BRDF_TABLE_LIMIT):
     """``(model, notes)``: ``model`` itself when its tables (pumped-up's albedo
     tables, :class:`~plausible.tables.AngleTable`) hold at most ``limit`` values
@@ -359,10 +364,13 @@ def brdf_tables(model, limit: int = BRDF_TABLE_LIMIT):
             err = t.difference(c)
             if best is None or err < best[0]:
                 best = (err, c)
+        if best is None:
+            least = 5 if t.isotropic else 5 * 7
+            raise ValueError(f"a table limit of {limit} values is too small for a table of {grid_text(t)} nodes: "
+                             f"it needs at least {least} values (3 polar nodes{'' if t.isotropic else ' x 4 azimuths'})")
         err, c = best
-        grid = lambda a: f"{a.n_theta} x {a.n_phi}" if a.n_phi else f"{a.n_theta}"  # noqa: E731
-        notes.append(f"albedo table {len(new)} resampled from {grid(t)} nodes ({t.size} values) to "
-                     f"{grid(c)} ({c.size} values): interpolation error at most {_ceil2(err):.2g} relative "
+        notes.append(f"albedo table {len(new)} resampled from {grid_text(t)} nodes ({t.size} values) to "
+                     f"{grid_text(c)} ({c.size} values): interpolation error at most {_ceil2(err):.2g} relative "
                      f"to the albedo (at the fine nodes and between them), and so to f, which divides by "
                      f"it; plausible export --format glsl or js keeps the full table")
         new.append(c)
@@ -396,6 +404,8 @@ def to_brdf(model, table_limit: int = BRDF_TABLE_LIMIT) -> str:
     world space, ``vec3 sampleBRDF(vec3 V, vec3 u, vec3 N, vec3 X, vec3 Y,
     out vec3 weight, out float pdf)``.
     """
+    if isinstance(table_limit, bool) or not isinstance(table_limit, int) or table_limit < 1:
+        raise ValueError(f"table_limit must be a positive whole number of table values, got {table_limit!r}")
     model, notes = brdf_tables(model, table_limit)
     wide = [p.name for p in type(model).PARAMS if p.kind == "color" and p.hi > 1.0]
     shader = to_glsl(model, uniforms=True, names=lambda n: n, split_colours=wide)
@@ -500,14 +510,16 @@ def _js_string(text: str) -> str:
 FORMATS = ("glsl", "brdf", "js")
 
 
-def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible") -> str:
+def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible",
+          table_limit: int = BRDF_TABLE_LIMIT) -> str:
     """Export ``model`` as ``fmt`` (``"glsl"``, ``"brdf"`` or ``"js"``) into ``path``
     (None: no file); returns the text.  ``prefix``: of the GLSL names
-    (:func:`to_glsl`, :func:`to_js`; a ``.brdf`` file holds one model)."""
+    (:func:`to_glsl`, :func:`to_js`; a ``.brdf`` file holds one model);
+    ``table_limit``: of a ``.brdf`` file's tables (:func:`to_brdf`)."""
     if fmt == "glsl":
         text = to_glsl(model, uniforms=uniforms, prefix=prefix).text
     elif fmt == "brdf":
-        text = to_brdf(model)
+        text = to_brdf(model, table_limit=table_limit)
     elif fmt == "js":
         text = to_js(model, prefix=prefix)
     else:

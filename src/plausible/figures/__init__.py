@@ -121,13 +121,42 @@ class Context:
             self.tick(self._total - self._done)
 
     # -- outputs ----------------------------------------------------------------
-    def image(self, name: str, img, exposure: float = 1.0, caption: str = "") -> np.ndarray:
-        """A render: ``name.exr`` (linear) and ``name.png`` (sRGB)."""
-        from .scenes import write_image
+    def image(self, name: str, img, exposure: float = 1.0, caption: str = "", rerender=None) -> np.ndarray:
+        """A render: ``name.exr`` (linear) and ``name.png`` (sRGB), and a check that it
+        has no isolated hot pixel (:func:`plausible.figures.scenes.hot_pixels`: luminance
+        above 4 x its 3x3 median + 0.5; a reference image has none).
+
+        ``rerender(y0, x0, h, w)``, if given, renders the window ``[y0, y0 + h) x [x0,
+        x0 + w)`` of the same scene with another seed: a hot pixel that stands out from
+        its 3x3 median there by at least half as much again is a feature of the image
+        (a glint smaller than a pixel), not noise, and is not counted (the note says
+        how many)."""
+        from .scenes import HOT_FACTOR, HOT_OFFSET, count_hot_pixels, hot_pixels, luminance, median3, write_image
 
         img = np.asarray(img, dtype=np.float64)
         write_image(self.out / name, img, exposure)
         self.items.append(dict(kind="image", png=f"{name}.png", exr=f"{name}.exr", caption=caption))
+        hot, iso = count_hot_pixels(img, isolated=False), hot_pixels(img)
+        steady = 0
+        if rerender is not None:
+            h, w = iso.shape
+            first = luminance(img) - median3(img)
+            for y, x in zip(*np.nonzero(iso)):
+                y0, x0 = max(0, min(y - 3, h - 7)), max(0, min(x - 3, w - 7))
+                crop = rerender(int(y0), int(x0), min(7, h), min(7, w))
+                excess = (luminance(crop) - median3(crop))[y - y0, x - x0]
+                steady += bool(excess >= 0.5 * first[y, x])   # a glint comes back; a firefly does not
+        n = int(iso.sum()) - steady
+        note = f"{hot} pixels pass the luminance test alone"
+        if hot > int(iso.sum()):
+            note += f", {hot - int(iso.sum())} of them with 2 or more neighbours as bright (the corners of a bright " \
+                    "area, not isolated)"
+        if steady:
+            note += f"; {steady} isolated one(s) as bright again (at least half the excess over the 3x3 median) in " \
+                    "a render of its neighbourhood with another seed: a glint smaller than a pixel, not noise; not " \
+                    "counted"
+        self.measure(f"{name}: isolated hot pixels (luminance > {HOT_FACTOR:g} x its 3x3 median + {HOT_OFFSET:g}, "
+                     "at most one neighbour as bright)", n, at_most=0, note=note)
         return img
 
     def plot(self, name: str, fig, caption: str = ""):

@@ -149,7 +149,7 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
                           progress=lambda total, label="", _n=name: start(progress, total, _n))
             t0 = time.time()
             m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
-                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick)
+                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders)
             try:
                 fig.fn(ctx, **fig.params)
                 m["status"] = "ok"
@@ -242,7 +242,8 @@ def write_index(out: Path, figs: dict) -> Path:
         parts.append(f"<h2 id='{e(n)}'>{e(m.get('title', n))}</h2>")
         parts.append(f"<p><b>{e(m.get('source', ''))}</b></p><blockquote>{e(m.get('caption', ''))}</blockquote>")
         params = dict(m.get("params", {}))
-        params.update(resolution=m.get("resolution"), spp=m.get("spp"))
+        if m.get("renders", True):   # image size and samples only where the section renders
+            params.update(resolution=m.get("resolution"), spp=m.get("spp"))
         parts.append("<p>Parameters: " + ", ".join(f"<code>{e(k)} = {e(str(v))}</code>" for k, v in params.items())
                      + f" &middot; made in {m.get('seconds', '?')} s</p>")
         if m.get("status") != "ok":

@@ -136,9 +136,13 @@ class ModifiedPhong(BxDF):
                              f"(energy conservation), got kd + ks = {fmt(total)}")
 
     @staticmethod
-    def spec_probability(q):
-        s = q.kd + q.ks
-        return q.ks / s if s > 0 else 0.5
+    def spec_probability(ops, q):
+        """``ks / (ks + kd)`` (channel means), 0.5 when both are zero; by
+        ``ops.where``, not a Python ``if``, so that parameters may be kernel data
+        (one compiled kernel for every value, :mod:`plausible.kernel_params`)."""
+        s = q.ks + q.kd
+        pos = s > 0
+        return ops.where(pos, q.ks / ops.where(pos, s, 1.0), 0.5)
 
     def _f(self, ops, wi, wo, p):
         return modified_phong_diffuse(ops, wi, wo, p) + modified_phong_glossy(ops, wi, wo, p)
@@ -152,7 +156,7 @@ class ModifiedPhong(BxDF):
                      lambda ops, wi, p: p.kd))
 
     def lobe_weights(self, ops, wi, q):
-        ps = self.spec_probability(q)
+        ps = self.spec_probability(ops, q)
         return ps, 1.0 - ps
 
     def _pdf(self, ops, wi, wo, q):

@@ -33,6 +33,9 @@ Colour bases: ``g`` uses the largest channel of the albedo.  It still satisfies
 eq. 17's lower bound for every channel (so every channel stays energy
 conserving), and it keeps the base's hue.  For a grey base it is the paper's operator.
 
+``times = 0`` is the base itself (no table), times the Fresnel factor: the unpumped
+row of the paper's fig. 8, rendered through the same plugin as the pumped one.
+
 Fresnel: the pumped lobe may be multiplied by a Fresnel factor ``F(L.H)``
 (:func:`plausible.fresnel.weight`; ``L.H = V.H`` keeps it reciprocal, ``F <= 1``
 keeps the albedo ``<= 1``), the way the paper renders its metals (fig. 8).
@@ -59,6 +62,7 @@ from .. import fresnel, vec
 from ..bxdf import BxDF, above
 from ..params import Param
 from ..registry import register
+from ..registry import spec_of as registry_spec_of
 
 #: Tables built in this process: key -> AngleTable.
 _TABLES: dict = {}
@@ -106,8 +110,28 @@ class ModelParam(Param):
 
 
 def spec_of(model) -> str:
-    """A canonical text of a model and its parameters (the cache key)."""
+    """A canonical text of a model and its parameters (the cache key): the
+    registry's spec string, whose floats are exact (``repr``), else the class and
+    its parameters at full precision.  Not ``repr(model)``: it prints 6
+    significant digits, so ``n=20`` and ``n=20.00004`` shared a table."""
+    if getattr(model, "info", None) is not None:
+        return registry_spec_of(model)
+    params = getattr(model, "params", None)
+    if isinstance(params, dict):
+        return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
+            f"{k}={_exact(v)}" for k, v in params.items()) + ")"
     return repr(model)
+
+
+def _exact(v) -> str:
+    """A parameter value as text that tells apart any two different values."""
+    if isinstance(v, BxDF):
+        return "[" + spec_of(v) + "]"
+    if isinstance(v, np.ndarray):
+        return repr(v.astype(np.float64).tolist())
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_exact(x) for x in v) + ")"
+    return repr(float(v)) if isinstance(v, float) else repr(v)
 
 
 @lru_cache(maxsize=None)
@@ -266,7 +290,8 @@ class PumpedUp(BxDF):
               doc="g1 = max(a(L), a(V)) (eq. 20), controlled g2 = max(a(L), a(V), N.V, N.L) capping the "
                   "total (eq. 21), or eq. 21 as printed, max(a(L), a(V), (N.V)(N.L)) at every level",
               extremes=("controlled",)),
-        Param("times", 1, 1, 8, integer=True, doc="how many times the operator is applied",
+        Param("times", 1, 0, 8, integer=True, doc="how many times the operator is applied (0: the base, "
+              "times the Fresnel factor)",
               extremes=(3,)),
         Param("fresnel", "none", kind="choice", choices=fresnel.FRESNEL_CHOICES,
               doc="Fresnel factor at L.H multiplied on the pumped lobe"),
@@ -281,7 +306,8 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
-        check_bounded_albedo(base, progress=progress)
+        if self.params["times"] > 0:
+            check_bounded_albedo(base, progress=progress)
         self.tables = []
         level = base
         for t in range(1, self.params["times"] + 1):
@@ -294,6 +320,13 @@ class PumpedUp(BxDF):
             raise ValueError(f"PumpedUp: the base has {base.channels} colour channels and "
                              f"rs/eta/k have {self.channels}; give them the same count")
         self.channels = chans.pop() if chans else None
+
+    def _kernel_view(self, convert):
+        """Its own data and the base's (:mod:`plausible.kernel_params`); the
+        albedo tables enter every kernel as arrays already."""
+        out = super()._kernel_view(convert)
+        out.base = self.base._kernel_view(convert)
+        return out
 
     def g(self, ops, wi, wo):
         """The total correction of every level (:func:`correction`)."""

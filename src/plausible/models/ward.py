@@ -111,9 +111,13 @@ class Ward(BxDF):
     )
 
     @staticmethod
-    def spec_probability(q):
+    def spec_probability(ops, q):
+        """``rs / (rs + rd)`` (channel means), 0.5 when both are zero; by
+        ``ops.where``, not a Python ``if``, so that parameters may be kernel data
+        (one compiled kernel for every value, :mod:`plausible.kernel_params`)."""
         s = q.rs + q.rd
-        return q.rs / s if s > 0 else 0.5
+        pos = s > 0
+        return ops.where(pos, q.rs / ops.where(pos, s, 1.0), 0.5)
 
     def _f(self, ops, wi, wo, p):
         return _ward_diffuse(ops, wi, wo, p) + _ward_glossy(ops, wi, wo, p)
@@ -132,7 +136,7 @@ class Ward(BxDF):
                      lambda ops, wi, p: p.rd))
 
     def lobe_weights(self, ops, wi, q):
-        ps = self.spec_probability(q)
+        ps = self.spec_probability(ops, q)
         return ps, 1.0 - ps
 
     def _pdf(self, ops, wi, wo, q):
