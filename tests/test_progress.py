@@ -114,10 +114,13 @@ def _run_in_pty(args, interrupt=False, timeout=60.0):
         os.execv(sys.executable, [sys.executable, "-m", "plausible.cli", *args])
     out, sent, t0 = b"", False, time.monotonic()
     while time.monotonic() - t0 < timeout:
-        if interrupt and not sent and HIDE in out:
+        if interrupt and HIDE in out and time.monotonic() - (sent or 0) > 1.0:
+            # Ctrl-C once the bar is up, again each second (as a user would): a
+            # SIGINT that lands while LLVM compiles a Dr.Jit kernel can be lost
+            # (seen on the first run of a new process, an upstream behaviour)
             time.sleep(0.3)
             os.kill(pid, signal.SIGINT)
-            sent = True
+            sent = time.monotonic()
         if select.select([fd], [], [], 0.1)[0]:
             try:
                 chunk = os.read(fd, 65536)
