@@ -66,7 +66,7 @@ VARIANTS = ("westin", "errata", "paper")
 ROUGH = ("series", "beckmann")
 #: ``g`` from which ``rough="beckmann"`` uses Beckmann's approximation (blended up to ``+ 1``).
 ROUGH_G = 18.0
-FRESNEL = ("conductor", "schlick", "none")
+FRESNEL = ("conductor", "dielectric", "schlick", "none")
 
 REFERENCES = (
     "He, Torrance, Sillion, Greenberg, A comprehensive physical model for light reflection, SIGGRAPH 1991",
@@ -78,8 +78,9 @@ REFERENCES = (
 N_TERMS = 128
 #: Terms of the windowed sum of :func:`series` (rough surfaces, ``g > 48``).
 N_WINDOW = 40
-#: Newton steps of the effective roughness (quadratic convergence; 1e-16 after 6).
-NEWTON_STEPS = 8
+#: Newton steps of the effective roughness (residual 4e-8 after 4, 7e-15 from 5 on,
+#: for ``f0`` from 1e-12 to 1e12).
+NEWTON_STEPS = 6
 _SQRT_PI = math.sqrt(PI)
 _INV_SQRT_8PI = 1.0 / math.sqrt(8.0 * PI)
 #: ``x`` used where ``cot(theta)`` is infinite (the normal): ``S = 1``, ``K = 0``.
@@ -95,11 +96,11 @@ def _cot_arg(ops, w, sigma0, tau):
     return x, s
 
 
-def shadowing(ops, x, variant):
+def shadowing(ops, x, variant, ec=None):
     """``S = (1 - erfc(x) / 2) / (Lambda + 1)`` (eq. 24) with
     ``Lambda = exp(-x^2) / (2 sqrt(pi) x) - erfc(x) / 2`` (eq. 25 and its errata;
-    ``variant="paper"`` drops the ``exp(-x^2)``).  ``x > 0``."""
-    ec = special.erfc(ops, x)
+    ``variant="paper"`` drops the ``exp(-x^2)``).  ``x > 0``; ``ec``: ``erfc(x)`` if known."""
+    ec = special.erfc(ops, x) if ec is None else ec
     inv = 1.0 / (2.0 * _SQRT_PI * x)
     lam = (inv if variant == "paper" else ops.exp(-x * x) * inv) - 0.5 * ec
     return (1.0 - 0.5 * ec) / (lam + 1.0)
@@ -119,54 +120,51 @@ def roughness_root(ops, f0):
     return ops.where(pos, y, 0.0)
 
 
-def effective_roughness(ops, xi, si, ci, xo, so, co, sigma0):
+def effective_roughness(ops, xi, si, ci, xo, so, co, sigma0, ei=None, eo=None):
     """``sigma = sigma0 / sqrt(1 + y^2)`` (eq. 80) with ``y`` from
     :func:`roughness_root` of ``(K_i + K_r) / sqrt(8 pi)``,
-    ``K = tan(theta) erfc(x)``, ``x = tau cot(theta) / (2 sigma0)`` (eqs. 82-83)."""
-    ki = si / ci * special.erfc(ops, xi)
-    ko = so / co * special.erfc(ops, xo)
+    ``K = tan(theta) erfc(x)``, ``x = tau cot(theta) / (2 sigma0)`` (eqs. 82-83);
+    ``ei``, ``eo``: ``erfc(xi)``, ``erfc(xo)`` if known."""
+    ki = si / ci * (special.erfc(ops, xi) if ei is None else ei)
+    ko = so / co * (special.erfc(ops, xo) if eo is None else eo)
     y = roughness_root(ops, (ki + ko) * _INV_SQRT_8PI)
     return sigma0 / ops.sqrt(1.0 + y * y)
 
 
-#: ``log(m!) + log(m)`` for ``m = 0 .. 64`` (``m = 0``: unused, kept finite).
-_LOG_FACT_M = tuple(math.lgamma(m + 1.0) + (math.log(m) if m else 0.0)
-                    for m in range(special.LOG_FACTORIAL_TABLE + 1))
+#: ``log(m!) + log(m)`` for ``m = 1 .. N_TERMS`` (index 0 unused), constants of the sum.
+_LOG_FACT_M = (0.0,) + tuple(math.lgamma(m + 1.0) + math.log(m) for m in range(1, N_TERMS + 1))
 _HALF_LOG_2PI = 0.5 * math.log(2.0 * PI)
 
 
 def _log_term(ops, m, g, lg, V):
-    """``log t(m) = log(g^m exp(-g) / (m! m) exp(-V / m))`` for whole ``m >= 1``:
-    ``log m! + log m`` from a table up to 64; above, Stirling's series
-    (Abramowitz & Stegun 6.1.41) as ``m (log g - log m) - 3/2 log m + (m - g) - ...``."""
-    T = float(special.LOG_FACTORIAL_TABLE)
-    small = m * lg - g - ops.gather(ops.table(_LOG_FACT_M), ops.minimum(m, T))
-    mb = ops.maximum(m, T + 1.0)
-    lm = ops.log(mb)
-    r = 1.0 / mb
+    """``log t(m) = log(g^m exp(-g) / (m! m) exp(-V / m))`` for whole ``m >= 1`` with
+    Stirling's series for ``log m!`` (Abramowitz & Stegun 6.1.41, three corrections),
+    written ``m (log g - log m) - 3/2 log m + (m - g) - ...`` so that ``m log g``
+    and ``log m!`` never cancel.  Its error, below 1e-16 for ``m > 10``, reaches
+    1e-3 at ``m = 1``; the windowed sum uses it only for ``g > 48``, where the
+    terms below ``m = 10`` are under 1e-12 of the sum."""
+    lm = ops.log(m)
+    r = 1.0 / m
     r2 = r * r
-    big = mb * (lg - lm) - 1.5 * lm + (mb - g) - _HALF_LOG_2PI \
-        - r * (1.0 / 12.0 - r2 * (1.0 / 360.0 - r2 / 1260.0))
-    return ops.where(m <= T, small, big) - V / m
+    return m * (lg - lm) - 1.5 * lm + (m - g) - _HALF_LOG_2PI \
+        - r * (1.0 / 12.0 - r2 * (1.0 / 360.0 - r2 / 1260.0)) - V * r
 
 
-def exact_terms(g_max, V_max=0.0):
+def exact_terms(g_max):
     """``(n, complete)``: the number of terms ``m = 1 .. n`` that :func:`series` sums
-    one by one when ``g <= g_max`` and ``V <= V_max`` (at least 16, at most
-    :data:`N_TERMS`), and whether they cover every ``g <= g_max`` (else the
-    windowed sum is needed).  ``n`` covers the Poisson window ``g + 12 sqrt(g)``
-    and the peak that ``exp(-V / m)`` moves up to at most ``sqrt(V)`` (for small
-    ``g``), with ``12`` widths ``(m^3 / (2 V))^(1/2)`` of it beyond."""
+    one by one when ``g <= g_max`` -- the Poisson window ``g + 12 sqrt(g)`` rounded up
+    to a multiple of 16 (so that nearby parameters share a compiled kernel), at most
+    :data:`N_TERMS` -- and whether they cover every ``g <= g_max`` (else the windowed
+    sum is needed)."""
     need = g_max + 12.0 * math.sqrt(g_max) + 2.0
-    shifted = math.sqrt(V_max) + 9.0 * V_max ** 0.25 + 2.0
-    n = int(min(N_TERMS, max(16, math.ceil(need), math.ceil(shifted))))
+    n = int(min(N_TERMS, 16 * math.ceil(need / 16.0)))
     return n, need <= N_TERMS + 1.0
 
 
 def series(ops, g, V, bound=None):
     """``sum_{m>=1} t(m)``, ``t(m) = g^m exp(-g) / (m! m) exp(-V / m)`` (eq. 78
-    without its factor), for ``g > 0`` and ``V >= 0``; ``bound = (g_max, V_max)``
-    (plain numbers, optional) bounds ``g`` and ``V`` and only saves work.
+    without its factor), for ``g > 0`` and ``V >= 0``; ``bound`` (a plain number,
+    optional) bounds ``g`` and saves work.
 
     ``t(m) <= P(m) / m`` with ``P`` the Poisson law of mean ``g``, which is below
     ``e^-37`` of its peak outside ``[g - 9 sqrt(g), g + 12 sqrt(g)]``.  When
@@ -183,11 +181,10 @@ def series(ops, g, V, bound=None):
     the peak of ``t`` far above ``g + 12 sqrt(g)``, where the value is negligible
     beside the lobe's peak."""
     lg = ops.log(g)
-    n, complete = (N_TERMS, False) if bound is None else exact_terms(*bound)
+    n, complete = (N_TERMS, False) if bound is None else exact_terms(bound)
     exact = 0.0
     for m in range(1, n + 1):
-        exact = exact + ops.exp(m * lg - g - (_LOG_FACT_M[m] if m <= special.LOG_FACTORIAL_TABLE
-                                              else math.lgamma(m + 1.0) + math.log(m)) - V * (1.0 / m))
+        exact = exact + ops.exp(m * lg - g - _LOG_FACT_M[m] - V * (1.0 / m))
     if complete:
         return exact
     root = ops.sqrt(g)
@@ -201,34 +198,41 @@ def series(ops, g, V, bound=None):
     return ops.where(windowed, k * total, exact)
 
 
-def rough_blend(ops, g, V, total):
+def rough_blend(ops, g, V, total, g_ref):
     """``rough="beckmann"``: Beckmann's rough-surface limit of the series,
     ``exp(-V / g) / g`` (Beckmann & Spizzichino 1963, sec. 5.3, eq. 47, the form
-    of Westin's code), for ``g >= 19``, the series ``total`` for ``g <= 18`` and
-    their linear blend between (bbm's ``he.h``, threshold 18; Westin's code
-    switches at 18.5 without a blend).  bbm takes the blend weight from the
-    smallest ``g`` of the RGB channels; here each channel uses its own ``g``."""
+    of Westin's code), where ``g_ref >= 19``, the series ``total`` where
+    ``g_ref <= 18`` and their linear blend between (bbm's ``he.h``, threshold 18;
+    Westin's code switches at 18.5, per channel, without a blend).  ``g_ref`` is
+    ``g`` at the model's longest wavelength, the smallest ``g`` of the channels,
+    from which bbm takes the weight of every channel."""
     gs = ops.maximum(g, 1e-300)
     approx = ops.exp(-V / gs) / gs
-    w = ops.minimum(ops.maximum(g - ROUGH_G, 0.0), 1.0)
+    w = ops.minimum(ops.maximum(g_ref - ROUGH_G, 0.0), 1.0)
     return total + w * (approx - total)
 
 
-def g_bound(sigma0, tau, wavelength, variant):
-    """``(g_max, V_max)``: ``g <= (4 pi sigma0 / min(lambda))^2`` (eq. 79:
-    ``sigma <= sigma0``, ``c_i + c_r <= 2``) and ``V <= tau^2 kappa^2``
-    (``v_xy^2 <= 4``), or None unless ``sigma0`` and ``tau`` are plain numbers."""
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (sigma0, tau)):
-        return None
-    lam = float(np.min(wavelength))
-    kappa = 2.0 * PI / lam if variant == "westin" else 1.0
-    return (4.0 * PI * sigma0 / lam) ** 2, (tau * kappa) ** 2
+def _varying(v) -> bool:
+    """``v`` is a Dr.Jit array of more than one lane (a texture), not one value."""
+    if isinstance(v, (int, float, np.ndarray)) or not hasattr(v, "__module__"):
+        return False
+    if not type(v).__module__.startswith("drjit"):
+        return False
+    import drjit as dr
+
+    return dr.width(v) > 1
 
 
-def parts(ops, wi, wo, p, bound=None):
+def g_bound(sigma0, wavelength):
+    """``g <= (4 pi sigma0 / min(lambda))^2`` (eq. 79: ``sigma <= sigma0``, ``c_i + c_r <= 2``)."""
+    return (4.0 * PI * float(sigma0) / float(np.min(wavelength))) ** 2
+
+
+def parts(ops, wi, wo, p, bound=None, lam_ref=None):
     """``(F, G, S_i S_r / (c_i c_r), D)`` of the directional-diffuse term for both
     directions above the horizon (other values are finite and unused); ``bound``
-    as in :func:`series`."""
+    as in :func:`series`; ``lam_ref`` the longest wavelength (``rough="beckmann"``,
+    :func:`rough_blend`; the channel's own by default)."""
     ok = above(ops, wi, wo)
     ci = ops.where(ok, wi[2], 1.0)
     co = ops.where(ok, wo[2], 1.0)
@@ -236,7 +240,8 @@ def parts(ops, wi, wo, p, bound=None):
     wo = (wo[0], wo[1], co)
     xi, si = _cot_arg(ops, wi, p.sigma0, p.tau)
     xo, so = _cot_arg(ops, wo, p.sigma0, p.tau)
-    sig = effective_roughness(ops, xi, si, ci, xo, so, co, p.sigma0)
+    ei, eo = special.erfc(ops, xi), special.erfc(ops, xo)
+    sig = effective_roughness(ops, xi, si, ci, xo, so, co, p.sigma0, ei, eo)
     vz = ci + co
     a = 2.0 * PI * sig * vz / p.wavelength
     g = a * a
@@ -247,20 +252,28 @@ def parts(ops, wi, wo, p, bound=None):
         V = V * (2.0 * PI / p.wavelength) ** 2
     total = series(ops, g, V, bound)
     if p.rough == "beckmann":
-        total = rough_blend(ops, g, V, total)
+        b = 2.0 * PI * sig * vz / (p.wavelength if lam_ref is None else lam_ref)
+        total = rough_blend(ops, g, V, total, b * b)
     D = (0.25 * PI * PI) * (p.tau / p.wavelength) ** 2 * total
     kh = vec.half_vector_cos(ops, wi, wo)[1]
     k2 = kh * kh
     G = 16.0 * k2 * k2 / (vz * vz)
-    S = (shadowing(ops, xi, p.variant) / ci) * (shadowing(ops, xo, p.variant) / co)
-    F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
-    return F, G, S, D
+    S = (shadowing(ops, xi, p.variant, ei) / ci) * (shadowing(ops, xo, p.variant, eo) / co)
+    return _fresnel(ops, p, kh), G, S, D
 
 
-def directional_diffuse(ops, wi, wo, p, bound=None):
+def _fresnel(ops, p, c):
+    """``F`` by ``p.fresnel``: :func:`plausible.fresnel.weight` (``conductor``, ``schlick``,
+    ``none``) or Cook & Torrance's real-index form :func:`plausible.fresnel.cook` (``dielectric``)."""
+    if p.fresnel == "dielectric":
+        return fresnel.cook(ops, c, p.eta)
+    return fresnel.weight(ops, p.fresnel, c, p.rs, p.eta, p.k)
+
+
+def directional_diffuse(ops, wi, wo, p, bound=None, lam_ref=None):
     """``rho_dd = F(k.h) G S_i S_r D / (pi c_i c_r)`` (eq. 76); zero unless both
     directions are above the horizon."""
-    F, G, S, D = parts(ops, wi, wo, p, bound)
+    F, G, S, D = parts(ops, wi, wo, p, bound, lam_ref)
     return ops.where(above(ops, wi, wo), F * (G * D) * S * INV_PI, 0.0)
 
 
@@ -270,10 +283,11 @@ def specular_albedo(ops, wi, p):
     ci = ops.where(wi[2] > 0, wi[2], 1.0)
     w = (wi[0], wi[1], ci)
     x, s = _cot_arg(ops, w, p.sigma0, p.tau)
-    sig = effective_roughness(ops, x, s, ci, x, s, ci, p.sigma0)
+    e = special.erfc(ops, x)
+    sig = effective_roughness(ops, x, s, ci, x, s, ci, p.sigma0, e, e)
     a = 4.0 * PI * sig * ci / p.wavelength
-    sh = shadowing(ops, x, p.variant)
-    F = fresnel.weight(ops, p.fresnel, ci, p.rs, p.eta, p.k)
+    sh = shadowing(ops, x, p.variant, e)
+    F = _fresnel(ops, p, ci)
     return ops.where(wi[2] > 0, F * ops.exp(-a * a) * sh * sh, 0.0)
 
 
@@ -308,7 +322,8 @@ class HeTorrance(BxDF):
         Param("wavelength", 0.55, 0.1, 10.0, "color",
               "wavelength per channel, micrometres (bbm's RGB: 0.645, 0.526, 0.444)"),
         Param("fresnel", "conductor", kind="choice", choices=FRESNEL,
-              doc="'conductor': exact, complex index eta + i k (k = 0: a dielectric); "
+              doc="'conductor': exact, complex index eta + i k (k = 0: a dielectric); 'dielectric': "
+                  "Cook & Torrance's real-index form (k unused; exactly 0 at eta = 1); "
                   "'schlick' (R0 = rs); 'none' (F = rs)"),
         Param("eta", 1.5, 0.0, 100.0, "color", "real part of the index of refraction"),
         Param("k", 0.0, 0.0, 100.0, "color", "imaginary part (extinction) of the index"),
@@ -323,17 +338,21 @@ class HeTorrance(BxDF):
     )
 
     def bound(self, p):
-        """The bounds of ``g`` and ``V`` that let :func:`series` sum fewer terms:
-        from ``p.sigma0`` and ``p.tau`` when they are plain numbers (NumPy, the library's Dr.Jit path, a
-        constant in an exported shader) and the model's own wavelengths (the
-        library's Dr.Jit lanes read them per channel; an exported shader whose
-        wavelength uniform goes below them would need a re-export); None (every
-        term) for a differentiable or textured ``sigma0`` in the Mitsuba plugin."""
-        return g_bound(p.sigma0, p.tau, self.p.wavelength, p.variant)
+        """The bound of ``g`` that lets :func:`series` sum fewer terms, from the
+        model's own ``sigma0`` and wavelengths (:func:`g_bound`), unless ``p.sigma0``
+        varies per lane (a Mitsuba texture: every term).  The NumPy, Dr.Jit, Mitsuba
+        (traversed values rebuild the model at ``params.update()``) and exported
+        (GLSL) forms of a model thus sum the same terms; an exported shader whose
+        ``sigma0`` uniform is raised above the model's, or its wavelength lowered,
+        sums too few (export the model with the new values)."""
+        if _varying(p.sigma0):
+            return None
+        return g_bound(self.p.sigma0, self.p.wavelength)
 
     def _f(self, ops, wi, wo, p):
         diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
-        return directional_diffuse(ops, wi, wo, p, self.bound(p)) + diffuse
+        lam_ref = float(np.max(self.p.wavelength))
+        return directional_diffuse(ops, wi, wo, p, self.bound(p), lam_ref) + diffuse
 
     # -- the delta lobe ---------------------------------------------------------------
     def delta_lobes(self, wi):
