@@ -7,10 +7,14 @@ BIN      := $(VENV)/bin
 STAMP    := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 OUT      ?= out
 JOBS     ?= 2
+# three.js for the example page's test (tests/export/test_three.py); the version of
+# examples/three/index.html's import map.
+THREE_VERSION := 0.187.0
+THREE_DIR     := .cache/npm/node_modules/three
 
-.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium clean
+.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium glslang three clean
 
-setup: $(STAMP) llvm chromium
+setup: $(STAMP) llvm chromium glslang three
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -31,6 +35,23 @@ chromium:
 	@if ! command -v chromium >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
 	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; fi; \
+	fi
+
+# The Khronos reference GLSL compiler for the shader export's tests (tests/export/test_glslang.py).
+glslang:
+	@if ! command -v glslangValidator >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq glslang-tools >/dev/null; \
+	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq glslang-tools >/dev/null; fi; \
+	fi
+
+# three.js from the npm registry, pinned, into .cache/npm (npm from Debian if missing).
+three:
+	@if ! grep -qs '"version": "$(THREE_VERSION)"' $(THREE_DIR)/package.json; then \
+	  if ! command -v npm >/dev/null 2>&1; then \
+	    if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm >/dev/null; \
+	    else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm >/dev/null; fi; \
+	  fi; \
+	  mkdir -p .cache/npm && npm install --silent --no-audit --no-fund --prefix .cache/npm three@$(THREE_VERSION); \
 	fi
 
 # The main job: every figure of the papers, measured, as a browsable report -> $(OUT)/index.html.
@@ -55,4 +76,4 @@ mitsuba-builtins: setup
 	$(BIN)/python scripts/mitsuba_builtins.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache .cache/npm

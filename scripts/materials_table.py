@@ -45,8 +45,10 @@ def main(argv=None):
         for k in keys:
             path = cache / (k.replace("/", "_") + ".json") if cache else None
             if path is not None and path.exists() and names is None:
-                got = [FitCheck(**{f: (tuple(v) if isinstance(v, list) else v) for f, v in d.items()
-                                   if f in FitCheck.__dataclass_fields__}) for d in json.loads(path.read_text())]
+                old = {"thetas": "thetas_deg"}          # a cache written before the field was renamed
+                got = [FitCheck(**{old.get(f, f): (tuple(v) if isinstance(v, list) else v) for f, v in d.items()
+                                   if old.get(f, f) in FitCheck.__dataclass_fields__})
+                       for d in json.loads(path.read_text())]
                 prog.advance(task, len(got))
             else:
                 got = check_fits([k], names, progress=lambda: prog.advance(task))

@@ -212,3 +212,22 @@ def check_drjit(model, n=500, seed=3):
     u = rng.random((n, 3))
     wo = model.sample(wi, u).wo
     hooks_agree(model, wi, wo, u, rtol=1e-10, atol=1e-12, rtol_sample=1e-10, atol_sample=1e-12)
+
+
+def as_specular_albedo_at_normal(nu, nv, rs):
+    """Directional albedo of the Ashikhmin-Shirley specular term at normal incidence, as a
+    1-D integral: with ``wi = n``, ``h.k = cos(theta_h) = c``, ``theta_o = 2 theta_h`` and
+    ``max(cos i, cos o) = 1``, ``a = sqrt((nu+1)(nv+1))/(8 pi) int c^e F(c) / c cos(2 theta_h)
+    4 c dw_h``; the azimuthal integral of ``c^(nu cos^2 + nv sin^2)`` is
+    ``2 pi c^((nu+nv)/2) I0((nu-nv)/2 ln c)`` (a Bessel function, scaled as ``i0e``)."""
+    from scipy import integrate, special
+
+    def g(t):
+        c = math.cos(t)
+        a, b = 0.5 * (nu + nv) * math.log(c), abs(0.5 * (nu - nv) * math.log(c))
+        fres = rs + (1 - rs) * (1 - c) ** 5
+        return math.exp(a + b) * special.i0e(b) * fres * math.cos(2 * t) * math.sin(t)
+
+    pts = [x for x in (1e-4, 1e-3, 1e-2, 0.1) if x < math.pi / 4]
+    val = integrate.quad(g, 0.0, math.pi / 4, points=pts, limit=500, epsabs=0, epsrel=1e-11)[0]
+    return math.sqrt((nu + 1) * (nv + 1)) / (8 * math.pi) * 4 * 2 * math.pi * val

@@ -177,3 +177,21 @@ def test_check_report_is_the_same_on_both_backends():
     assert abs(ea.figure - eb.figure) <= ea.worst["error"] + eb.worst["error"]
     # the chi-square statistic sees the same samples and cell integrals to 1e-6
     assert b["chi2"].figure == pytest.approx(a["chi2"].figure, rel=1e-3)
+
+
+#: Modules that ``import plausible`` must not load (each costs 0.1-1 s; the code
+#: that needs one imports it where it is used).
+HEAVY = ("scipy.stats", "scipy.optimize", "drjit", "mitsuba", "matplotlib", "PIL")
+
+
+def test_import_plausible_loads_no_heavy_module():
+    """``import plausible`` in a fresh process leaves out scipy.stats (about 1 s),
+    scipy.optimize, Dr.Jit, Mitsuba and matplotlib; the same probe sees
+    ``scipy.stats`` once the script imports it (so it can fail)."""
+    probe = "import sys, plausible{}; print(' '.join(m for m in {!r} if m in sys.modules))"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    for extra, expect in (("", set()), (", scipy.stats", {"scipy.stats", "scipy.optimize"})):
+        r = subprocess.run([sys.executable, "-c", probe.format(extra, HEAVY)], capture_output=True,
+                           text=True, env=env, timeout=120)
+        assert r.returncode == 0, r.stderr
+        assert set(r.stdout.split()) == expect

@@ -90,3 +90,28 @@ def test_albedo_of_a_pumped_up_model_with_a_nested_spec():
     assert rows and rows[0].count("1.000000") == 2
     r = CliRunner().invoke(main, ["albedo", "pumped-up:base=[phong:n=20]", "-n", "3"])
     assert r.exit_code != 0 and "not reciprocal" in r.output
+
+
+@pytest.mark.parametrize("text", ["-1,-1,1,20,1.5", "-1,-1,1,20,1.5;", "(-1.0, -1.0, 1.0, 20.0, 1.5)",
+                                  "[(-1, -1, 1, 20, 1.5)]"])
+def test_one_lafortune_lobe_in_every_form_gives_the_mirror_value(text):
+    r = run("eval", "lafortune", "-p", f"lobes={text}", "-p", "rd=0", "--wi", "10,0", "--wo", "10,180")
+    assert r.exit_code == 0, r.output
+    assert float(r.output) == pytest.approx(1.5, rel=1e-12)   # at the mirror direction the lobe is rho
+
+
+def test_the_lobes_that_plausible_models_prints_read_back():
+    from plausible.cli import _fmt
+
+    lobes = ((-1.0, -1.0, 1.0, 20.0, 1.25), (0.5, 0.5, 1.0, 8.0, 0.125))
+    printed = _fmt(lobes)          # the text of the 'plausible models' table
+    assert printed.startswith("(-1.0, -1.0, 1.0, 20.0, 1.25),(")
+    m = plausible.registry.make_from_spec("lafortune", **plausible.registry.parse_assignments([f"lobes={printed}"]))
+    assert m.params["lobes"] == lobes
+
+
+@pytest.mark.parametrize("text", ["-1,-1,1,20", "(-1,-1,1,20,1.5),x", "(-1,-1,1,20)"])
+def test_a_malformed_lobe_shows_the_expected_form(text):
+    r = CliRunner().invoke(main, ["eval", "lafortune", "-p", f"lobes={text}", "--wi", "0,0", "--wo", "0,0"])
+    assert r.exit_code == 2 and "parameter 'lobes'" in r.output
+    assert "-p lobes=cx,cy,cz,n,rho" in r.output or "'(a, b, c), (d, e, f)'" in r.output

@@ -47,6 +47,16 @@ class TestProtocol:
         assert _complete(c.counts)
         assert sum(total for total, _ in c.counts.values()) == len(table.values)   # each node once
 
+    def test_a_large_albedo_table_ticks_as_it_goes(self):
+        """144 albedos (9 polar angles x 16 azimuths) tick in batches of 64, not once at the end."""
+        ticks = []
+
+        def factory(total, label=""):
+            return lambda n=1: ticks.append(n)
+
+        albedo_table(make("ward", alpha_x=0.1, alpha_y=0.3), n_phi=16, n_theta=9, max_theta=9, progress=factory)
+        assert ticks == [64, 64, 16]
+
     def test_check_counts_every_step_in_one_total(self):
         c = Counter()
         check(make("lambertian"), quick=True, progress=c)

@@ -18,9 +18,10 @@ from .fitting import fit
 from .library import material, materials
 from .models.sum import Sum
 from .registry import info, make, names, register
+from .vec import angles, direction
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "check", "chi2", "energy", "fit",
+__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "direction", "energy", "fit",
            "hemispherical_albedo", "info", "make", "material", "materials", "names", "reciprocity", "register",
            "sampling_consistency", "use_backend", "__version__"]

@@ -308,7 +308,7 @@ MAX_LANES = 1 << 27
 
 
 def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
-              per_phi: bool = False) -> np.ndarray:
+              per_phi: bool = False, tmax=None) -> np.ndarray:
     """Tensor-product quadrature sums for many incidences in one Dr.Jit launch:
 
     ``S[a] = sum_ij theta_w[a, i] phi_w[a, j] g(wis[a], wo(theta[a, i], phi[a, j]))``
@@ -319,7 +319,13 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
     length.  Every size enters the kernel as data (opaque), so the kernel is
     traced and compiled once per model and reused for any grid.  Returns ``(A,)``
     or ``(A, channels)``; with ``per_phi`` (``kind="pdf"`` only) the sums over ``i``
-    alone, ``(A, n_phi)``."""
+    alone, ``(A, n_phi)``.
+
+    With ``tmax`` (an array shaped like ``phi``) the rule is in the half-vector frame
+    of :func:`plausible.analysis.quadrature.half_vector_breaks`: ``theta`` holds
+    ``s``, the half vector is at polar angle ``t = s tmax`` and azimuth ``phi``,
+    ``wo = 2 (wi.h) h - wi``, and each node's weight is multiplied by
+    ``tmax sin(t) 4 (wi.h)`` (``theta_w`` then holds no ``sin``)."""
     dr, F, U, ops = _dr()
     A, nt = theta.shape
     npp = phi.shape[1]
@@ -332,14 +338,14 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
     for s in range(0, A, group):
         e = min(s + group, A)
         out.append(_grid_sums(dr, F, U, ops, model, kind, wis[s:e], theta[s:e], theta_w[s:e],
-                              phi[s:e], phi_w[s:e], c, per_phi))
+                              phi[s:e], phi_w[s:e], c, per_phi, None if tmax is None else tmax[s:e]))
     res = np.concatenate(out)
     if per_phi:
         return res.reshape(A, npp)
     return res.reshape(A, c) if kind == "f" and model.channels else res
 
 
-def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi):
+def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi, tmax=None):
     A, nt = theta.shape
     npp = phi.shape[1]
     lanes = A * nt * npp * c
@@ -362,10 +368,19 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     def table(x):
         return F(np.ascontiguousarray(x, dtype=np.float64).ravel())
 
-    st, ct, wt = (dr.gather(F, table(x), ti) for x in (np.sin(theta), np.cos(theta), theta_w))
     cp, sp, wp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi), phi_w))
-    wo = (st * cp, st * sp, ct)
     wi = tuple(dr.gather(F, table(wis[:, k]), a) for k in range(3))
+    if tmax is None:
+        st, ct, wt = (dr.gather(F, table(x), ti) for x in (np.sin(theta), np.cos(theta), theta_w))
+        wo = (st * cp, st * sp, ct)
+    else:   # the half-vector frame: h at (s tmax, phi), wo its mirror image of wi
+        tm = dr.gather(F, table(tmax), pj)
+        st, ct = dr.sincos(dr.gather(F, table(theta), ti) * tm)
+        h = (st * cp, st * sp, ct)
+        d = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]
+        wo = tuple(2.0 * d * hk - wk for hk, wk in zip(h, wi))
+        wt = dr.gather(F, table(theta_w), ti) * tm * st * (4.0 * d)
+        ct = wo[2]
     if kind == "f":
         p = model.p
         if model.channels:
@@ -380,6 +395,8 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
         g = model._pdf(ops, wi, wo, model.q)
     if not (_is_jit(g) or isinstance(g, (int, float))):
         raise _NotJit(type(g).__name__)
+    if tmax is not None:    # the contract's zero below the horizon (rounding at the edge s = 1)
+        g = dr.select(wo[2] > 0, F(g), 0.0)
     v = F(g) * (wt * wp)
     if per_phi:
         total = dr.zeros(F, A * npp)

@@ -222,6 +222,46 @@ def stack(c):
     return np.stack(np.broadcast_arrays(*c), axis=-1)
 
 
+class Params(dict):
+    """A model's validated parameters, read-only: the formulas read them once,
+    when the model is built, so a changed value would show in the ``repr``, the
+    spec and an exported shader while ``eval`` kept the old one.  A changed
+    model is a new model: :meth:`BxDF.replace`.  (A ``dict`` subclass, so JSON,
+    ``dict(m.params)`` and ``isinstance(..., dict)`` work; colour arrays are
+    made read-only too.)"""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("model parameters are read-only; m.replace(name=value) returns a new, "
+                        "validated model")
+
+    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _refuse
+
+    def __reduce__(self):
+        return (_unpickled_params, (dict(self),))
+
+    def copy(self) -> dict:
+        """A plain (mutable) ``dict`` of the parameters."""
+        return dict(self)
+
+
+def _unpickled_params(values: dict) -> Params:
+    """:class:`Params` of an unpickled model, its arrays read-only again (pickle
+    restores arrays writable; the model's ``p`` shares these objects)."""
+    for v in values.values():
+        if isinstance(v, np.ndarray):
+            v.flags.writeable = False
+    return Params(values)
+
+
+def _frozen(v):
+    """``v``, a NumPy array copied and made read-only (the caller's array stays
+    the caller's: changing it later does not change the model)."""
+    if isinstance(v, np.ndarray):
+        v = np.array(v)
+        v.flags.writeable = False
+    return v
+
+
 class BxDF:
     """Base class of every model: parameter handling plus the NumPy contract."""
 
@@ -237,6 +277,9 @@ class BxDF:
     #: ``{name: function(p)}`` of the parameter namespace, written against any
     #: backend (the Mitsuba plugins recompute it from differentiable values).
     DERIVED: ClassVar[dict] = {}
+    #: Channel counts a colour parameter may have: one (grey) or three (RGB).  A
+    #: spectral model widens it to its wavelength count.
+    CHANNELS: ClassVar[tuple] = (1, 3)
 
     def __init__(self, **params):
         owner = type(self).__name__
@@ -247,18 +290,55 @@ class BxDF:
                              f"allowed: {', '.join(names) or 'none'}")
         values = {}
         for p in self.PARAMS:
-            values[p.name] = p.validate(params.get(p.name, p.default), owner)
+            values[p.name] = _frozen(p.validate(params.get(p.name, p.default), owner))
+        for p, v in zip(self.PARAMS, values.values()):
+            if p.kind == "color" and np.ndim(v) == 1 and np.size(v) not in self.CHANNELS:
+                raise ValueError(f"{owner}: parameter '{p.name}' must have "
+                                 f"{' or '.join(map(str, self.CHANNELS))} channel(s) "
+                                 f"(a grey value or RGB), got {np.size(v)}: {fmt(v)}")
         sizes = {np.size(v) for p, v in zip(self.PARAMS, values.values())
                  if p.kind == "color" and np.ndim(v) == 1}
         if len(sizes) > 1:
             raise ValueError(f"{owner}: colour parameters have different channel counts {sorted(sizes)}")
         self.channels = sizes.pop() if sizes else None
-        self.params = values
+        self._params = Params(values)
         self._validate()
         self.p = SimpleNamespace(**values)
         self.q = SimpleNamespace(**{
             k: (float(np.mean(v)) if isinstance(v, np.ndarray) else v) for k, v in values.items()
         })
+
+    @property
+    def params(self) -> Params:
+        """The validated parameters (read-only; :meth:`replace` makes a changed model)."""
+        return self._params
+
+    def replace(self, **changes) -> "BxDF":
+        """A new model of the same kind with ``changes`` applied, validated as at
+        construction (the original is unchanged).  A derived parameter (e.g.
+        Neumann's ``c = (n + 2) / (2 pi)``) left at its derived value is derived
+        again from the new values.
+
+        >>> import plausible
+        >>> m = plausible.make("ward", alpha_x=0.2)
+        >>> m.replace(alpha_x=0.3).params["alpha_x"], m.params["alpha_x"]
+        (0.3, 0.2)
+        """
+        if not self.PARAMS:                  # a sum, a measured table: built from parts, not values
+            if changes:
+                raise ValueError(f"{type(self).__name__} has no parameters to replace "
+                                 f"(got {', '.join(sorted(changes))})")
+            return self
+        values = dict(self.params)
+        for k, derive in self.DERIVED.items():
+            if k not in changes and k in values:
+                try:
+                    if np.all(np.asarray(values[k]) == np.asarray(derive(self.p))):
+                        values[k] = None
+                except (TypeError, ValueError):
+                    pass
+        values.update(changes)
+        return type(self)(**values)
 
     # -- hooks a model implements -------------------------------------------------
     def _validate(self):
@@ -389,6 +469,13 @@ class BxDF:
         args = ", ".join(f"{k}={fmt(v, other=repr)}" for k, v in self.params.items())
         return f"{type(self).__name__}({args})"
 
+    def _repr_html_(self) -> str:
+        """The model in a notebook: its name and parameters as a table."""
+        from .text import html_table
+
+        return html_table(f"{self.name} ({type(self).__name__})", ["parameter", "value"],
+                          [(k, fmt(v, other=str)) for k, v in self.params.items()])
+
 
 #: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).
 #: Models that divide by ``cos(theta)`` (original Phong/Blinn, Ward, Cook-Torrance
@@ -401,4 +488,4 @@ def above(ops, wi, wo):
     return (wi[2] > HORIZON) & (wo[2] > HORIZON)
 
 
-__all__ = ["BxDF", "Sample", "Param", "above", "as_directions", "vec"]
+__all__ = ["BxDF", "Params", "Sample", "Param", "above", "as_directions", "vec"]

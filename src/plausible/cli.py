@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 
 import click
 import numpy as np
@@ -104,7 +105,26 @@ PARAM_OPT = click.option("-p", "--param", "params", multiple=True, metavar="NAME
                          help="Model parameter (repeatable); colours as r,g,b.")
 
 
-@click.group(context_settings=dict(help_option_names=["-h", "--help"]))
+#: Console width on a pipe or file: wide enough that no table cell is cut or
+#: folded (Rich's default there is 80 columns, which cut the material keys that
+#: users copy); a terminal keeps its own width, and COLUMNS still sets one.
+PIPE_WIDTH = 10_000
+
+
+class _Group(click.Group):
+    """The command group: Ctrl-C ends any command with status 130 (128 + SIGINT,
+    the shell's convention; 1 means "a property fails"), after the progress
+    display is cleared."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            click.echo("interrupted", err=True)
+            ctx.exit(130)
+
+
+@click.group(cls=_Group, context_settings=dict(help_option_names=["-h", "--help"]))
 @click.version_option(package_name="plausible")
 @click.pass_context
 def main(ctx):
@@ -113,12 +133,60 @@ def main(ctx):
     Evaluate, sample, verify and plot the models of Ashikhmin & Shirley (2000),
     Neumann, Neumann & Szirmay-Kalos (1999) and Lafortune & Willems (1994).
     """
+    import os
+
+    if not console.is_terminal and not os.environ.get("COLUMNS"):
+        console.width = PIPE_WIDTH
     ctx.obj = ctx.with_resource(_Bar())
 
 
+def _echo_json(data):
+    import json
+
+    from .text import jsonable
+
+    click.echo(json.dumps(jsonable(data), indent=1, allow_nan=False))
+
+
+def _model_entry(name) -> dict:
+    inf = registry.info(name)
+    return dict(name=inf.name, description=inf.description, reciprocal=inf.reciprocal,
+                energy_conserving=inf.energy_conserving, references=list(inf.references),
+                params=[dict(name=p.name, default=p.default, lo=p.lo if math.isfinite(p.lo) else None,
+                             hi=p.hi if math.isfinite(p.hi) else None, kind=p.kind, doc=p.doc,
+                             **({"choices": list(p.choices)} if p.choices else {}),
+                             **({"integer": True} if p.integer else {})) for p in inf.params])
+
+
 @main.command()
-def models():
-    """List every registered model with its parameters, defaults and ranges."""
+@click.argument("name", required=False)
+@click.option("--json", "as_json", is_flag=True, help="Print the models as JSON.")
+def models(name, as_json):
+    """List every registered model with its parameters, defaults and ranges;
+    with NAME, that model alone (its parameters, claims and references)."""
+    if name is not None:
+        try:
+            entry = _model_entry(name)
+        except ValueError as e:
+            _fail(str(e))
+        if as_json:
+            return _echo_json(entry)
+        inf = registry.info(name)
+        console.print(f"[bold]{escape(name)}[/bold]: {escape(inf.description)}", soft_wrap=True)
+        claims = ["reciprocal" if inf.reciprocal else "not reciprocal",
+                  "energy conserving" if inf.energy_conserving else "not energy conserving"]
+        console.print(f"claims: {', '.join(claims)}", soft_wrap=True)
+        t = Table(title="parameters")
+        for col in ("name", "default", "range", "kind", "meaning"):
+            t.add_column(col)
+        for p in inf.params:
+            t.add_row(escape(p.name), escape(_fmt(p.default)), escape(p.range_text()), p.kind, escape(p.doc))
+        console.print(t)
+        for ref in inf.references:
+            console.print(f"reference: {escape(ref)}", soft_wrap=True)
+        return
+    if as_json:
+        return _echo_json([_model_entry(n) for n in registry.names()])
     t = Table(title="registered models", show_lines=True)
     t.add_column("model", style="bold", no_wrap=True, min_width=max(map(len, registry.names())))
     t.add_column("parameters (default, range)")
@@ -141,13 +209,31 @@ def _fmt(v):   # the syntax of -p: colours as r,g,b
 @main.command("eval")
 @click.argument("model")
 @PARAM_OPT
-@click.option("--wi", required=True, metavar="THETA_DEG,PHI_DEG", help="Direction wi (to the light).")
-@click.option("--wo", required=True, metavar="THETA_DEG,PHI_DEG", help="Direction wo (to the viewer).")
-def eval_cmd(model, params, wi, wo):
-    """Print the BRDF value f(wi, wo) (no cosine factor)."""
+@click.option("--wi", required=True, multiple=True, metavar="THETA_DEG,PHI_DEG",
+              help="Direction wi (to the light); repeatable.")
+@click.option("--wo", required=True, multiple=True, metavar="THETA_DEG,PHI_DEG",
+              help="Direction wo (to the viewer); repeatable.")
+@click.option("--json", "as_json", is_flag=True, help="Print the pairs and values as JSON.")
+def eval_cmd(model, params, wi, wo, as_json):
+    """Print the BRDF value f(wi, wo) (no cosine factor), one line per pair.
+
+    Several pairs: repeat --wi and --wo (the k-th --wi with the k-th --wo), or
+    give one --wi and several --wo (or the reverse).
+    """
     m = _model(model, params)
-    f = m.eval(_angles(wi, "--wi"), _angles(wo, "--wo"))
-    click.echo(" ".join(f"{x:.10g}" for x in np.atleast_1d(f)))
+    if len(wi) != len(wo) and 1 not in (len(wi), len(wo)):
+        _fail(f"give as many --wi as --wo (paired in order), or one of either; got {len(wi)} --wi "
+              f"and {len(wo)} --wo")
+    n = max(len(wi), len(wo))
+    wis, wos = (list(x) * n if len(x) == 1 else list(x) for x in (wi, wo))
+    a = np.array([_angles(t, "--wi") for t in wis])
+    b = np.array([_angles(t, "--wo") for t in wos])
+    f = m.eval(a, b)
+    if as_json:
+        return _echo_json([dict(wi=[float(x) for x in s.split(",")], wo=[float(x) for x in t.split(",")],
+                                f=np.atleast_1d(v)) for s, t, v in zip(wis, wos, f)])
+    for v in f:
+        click.echo(" ".join(f"{x:.10g}" for x in np.atleast_1d(v)))
 
 
 @main.command()
@@ -157,6 +243,7 @@ def eval_cmd(model, params, wi, wo):
 @click.option("--all", "all_models", is_flag=True,
               help="Check every registered model on its defaults and extreme parameters.")
 @click.option("--quick", is_flag=True, help="Fewer directions and samples.")
+@click.option("--verbose", is_flag=True, help="With --all: every parameter set's full report too.")
 @click.option("--mitsuba", "mitsuba_dict", metavar="JSON",
               help='A Mitsuba 3 BSDF as mi.load_dict takes it, e.g. \'{"type": "roughconductor", "alpha": 0.2}\'.')
 @click.option("--mitsuba-xml", type=click.Path(exists=True, dir_okay=False), metavar="FILE",
@@ -165,15 +252,21 @@ def eval_cmd(model, params, wi, wo):
 @click.option("--python", "python_obj", metavar="MODULE:NAME",
               help="A callable f(wi, wo) (optional .pdf and .sample), an object with eval/pdf/sample, "
                    "or a mitsuba.BSDF, importable as package.module:name.")
-def check(model, params, as_json, all_models, quick, mitsuba_dict, mitsuba_xml, bsdf_id, python_obj):
+def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id, python_obj):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
     --python (see docs/analysis.md).  Exits with status 1 when a property fails.
-    With --all: every registered model on its defaults and extremes, a model
-    whose check raises is reported and the others still run, a summary line
-    ends the output, and the status is 1 when a model fails a property it claims.
+    A registered model's report ends with whether it holds what the model
+    claims ("as claimed").  With --all: every registered model on its defaults
+    and extremes, one row each in a compact table (--verbose: every full report
+    too); a model whose check raises is reported and the others still run, a
+    summary line ends the output, and the status is 1 when a model fails a
+    property it claims.  --json: non-applicable checks have "passed" and
+    "figure" null, and "counts" tallies passed, failed and not applicable.
     """
+    import json
+
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
@@ -189,7 +282,7 @@ def check(model, params, as_json, all_models, quick, mitsuba_dict, mitsuba_xml, 
         targets = [foreign]
     else:
         targets = [_model(model, params)]
-    reports, verdicts = [], []
+    reports, verdicts, rows = [], [], []
     for m in targets:
         try:
             rep = run_check(m, quick=quick, progress=silent if as_json else _bar())
@@ -199,26 +292,64 @@ def check(model, params, as_json, all_models, quick, mitsuba_dict, mitsuba_xml, 
             reports.append(dict(CheckReport(m.name, m.params).to_dict(), passed=False,
                                 error=f"{type(e).__name__}: {e}"))
             verdicts.append(False)
+            rows.append((m, None, False))
             if not as_json:
                 console.print(f"[red]check {escape(repr(m))} failed with an error:[/red] "
                               f"{escape(reports[-1]['error'])}")
             continue
         reports.append(rep.to_dict())
-        verdicts.append(rep.as_claimed(m.info) if all_models else rep.passed)
-        if not as_json:
+        info = getattr(m, "info", None)
+        claimed = rep.as_claimed(info) if info is not None else None
+        verdicts.append(claimed if all_models else rep.passed)
+        rows.append((m, rep, claimed))
+        if not as_json and (not all_models or verbose):
             _print_report(rep)
+            if not all_models and claimed is not None:
+                console.print(_claim_line(rep, info), soft_wrap=True)
     if as_json:
-        import json
-
         click.echo(json.dumps(reports if all_models else reports[0], indent=1))
     if all_models:   # the implausible baselines may fail what they do not claim
         errors = sum("error" in r for r in reports)
         if not as_json:
+            _print_compact(rows)
             bad = [f"{r['model']} {_fmt_params(r['params'])}" for r, v in zip(reports, verdicts) if not v]
             click.echo(f"{len(reports)} parameter sets of {len(registry.names())} models checked: "
                        f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
                        f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
     sys.exit(0 if all(verdicts) else 1)
+
+
+def _claim_line(rep, info) -> str:
+    """Does the report agree with what the model claims?  (The explorer's verdict line.)"""
+    claims = ("reciprocal" if info.reciprocal else "not reciprocal") + ", " + \
+        ("energy conserving" if info.energy_conserving else "not energy conserving")
+    if rep.as_claimed(info):
+        return f"[green]as claimed[/green] ({escape(info.name)} claims: {claims})"
+    return f"[red]not as claimed[/red] ({escape(info.name)} claims: {claims})"
+
+
+#: The columns of the compact ``check --all`` table: the four properties.
+_PROPERTIES = ("reciprocity", "energy", "sampling", "chi2")
+
+
+def _print_compact(rows):
+    """``check --all``: one row per parameter set (verdict of each property, the claim)."""
+    t = Table(title="check --all", title_justify="left")
+    t.add_column("model", no_wrap=True)
+    t.add_column("parameters")
+    for c in _PROPERTIES + ("as claimed",):
+        t.add_column(c, no_wrap=True)
+    colour = {"PASS": "green", "FAIL": "red", "N/A": "yellow", "error": "red"}
+    for m, rep, claimed in rows:
+        if rep is None:
+            cells = ["error"] * len(_PROPERTIES)
+        else:
+            verdict = {r[0]: r[3] for r in rep.rows()}
+            cells = [verdict.get(p, "-") for p in _PROPERTIES]
+        cells = [f"[{colour.get(c, 'white')}]{c}[/]" for c in cells]
+        yes = "-" if claimed is None else "[green]yes[/]" if claimed else "[red]no[/]"
+        t.add_row(escape(m.name), escape(_fmt_params(m.params)), *cells, yes)
+    console.print(t)
 
 
 def _fmt_params(ps):
@@ -264,7 +395,7 @@ def _print_report(rep):
     for c in ("property", "figure", "bound", "verdict", "worst case"):
         t.add_column(c, overflow="fold")
     for row in rep.rows():
-        style = "green" if row[3] == "PASS" else "red"
+        style = {"PASS": "green", "UNRESOLVED": "yellow"}.get(row[3], "red")
         style = "yellow" if row[3] == "N/A" else style
         t.add_row(*map(escape, row[:3]), f"[{style}]{row[3]}[/{style}]", escape(row[4]))
     console.print(t)
@@ -280,7 +411,8 @@ def _print_report(rep):
               help="Azimuth of incidence (degrees).")
 @click.option("-n", "--points", default=46, show_default=True, type=click.IntRange(1, 100_000),
               help="Number of incidence angles.")
-def albedo(models, params, plot, phi, points):
+@click.option("--json", "as_json", is_flag=True, help="Print the curves as JSON.")
+def albedo(models, params, plot, phi, points, as_json):
     """Directional albedo against incidence angle, for one or more models.
 
     MODELS are names with optional parameters, e.g. reciprocal-phong:n=150
@@ -295,8 +427,14 @@ def albedo(models, params, plot, phi, points):
             _fail(str(e))
     th = default_thetas(points)
     targets = [_model(spec, params) for spec in models]
-    tick = _bar()(len(targets) * len(th), "albedo")
+    tick = (silent if as_json else _bar())(len(targets) * len(th), "albedo")
     curves = [(repr(m), th, albedo_curve(m, th, math.radians(phi), progress=within(tick))) for m in targets]
+    if as_json:
+        _echo_json([dict(model=registry.spec_of(m), phi_deg=phi, theta_deg=np.degrees(th), value=r.value,
+                         error=r.error) for m, (_, _, r) in zip(targets, curves)])
+        if plot:
+            plot_albedo_curves(curves, plot)
+        return
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
     for label, _, _ in curves:
@@ -325,7 +463,8 @@ def _fmt_alb(v, e):
 @main.command("fit")
 @click.argument("model")
 @click.option("--target", required=True, metavar="FILE_OR_MODEL",
-              help="A model spec (name:k=v), a MERL .binary file or a CSV table (wi xyz, wo xyz, f).")
+              help="A model spec (name:k=v), a published fit (material:NAME@FIT), a MERL .binary file or a CSV "
+                   "table (wi xyz, wo xyz, f).")
 @PARAM_OPT
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
@@ -335,15 +474,17 @@ def _fmt_alb(v, e):
 @click.option("--seed", default=0, show_default=True, help="Seed of the random starts.")
 def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
-    from .fitting import fit as run_fit
+    from .fitting import UnconstrainedWarning, fit as run_fit
     from .fitting.plots import write_plots
     from .plotting import check_writable_dir
 
     try:
         if out:     # before the fit: a folder that cannot be written fails now, not after it
             check_writable_dir(out, "--out", create=True)
-        res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
-                      seed=seed, time_limit=time_limit, progress=_bar())
+        with warnings.catch_warnings(record=True) as caught:     # printed below, as the command's own line
+            warnings.simplefilter("always", UnconstrainedWarning)
+            res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
+                          seed=seed, time_limit=time_limit, progress=_bar())
     except ValueError as e:
         _fail(str(e))
     console.print(f"[bold]{escape(res.model.name)}[/bold] fitted to {escape(res.target.label)} ({metric}, "
@@ -360,6 +501,11 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     console.print(e)
     if res.timed_out:
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
+    for w in caught:
+        if issubclass(w.category, UnconstrainedWarning):
+            console.print(f"[yellow]warning:[/yellow] {escape(str(w.message))}", soft_wrap=True)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if out:
         for p in write_plots(res, out):
             console.print(f"wrote {escape(str(p))}")
@@ -397,11 +543,14 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
 
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
+    bad = []
     try:
         todo = batch.plan(targets, models_, metrics_, out=out, seed=seed, starts=starts,
-                          time_limit=time_limit, retry_failed=retry_failed)
+                          time_limit=time_limit, retry_failed=retry_failed, problems=bad)
     except ValueError as e:
         _fail(str(e))
+    for b in bad:       # malformed rows: skipped (their fits run again), the good rows kept
+        console.print(f"[yellow]skipped a malformed row[/yellow] {escape(b)}", soft_wrap=True)
     failed = [0]
 
     def on_result(row):
@@ -421,6 +570,10 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
         console.print(f"[yellow]interrupted[/yellow]: the finished fits are in {escape(out)}; "
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
+    except ValueError as e:     # the folder cannot be written (read-only, disk full): what is kept, how to resume
+        _fail(str(e))
+    if s.shared:
+        console.print(f"{s.shared} fits left to another run on {escape(out)}", soft_wrap=True)
     if s.dashboard:
         console.print(f"Dask dashboard: {s.dashboard}")
     console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "
@@ -470,11 +623,15 @@ class _BatchBar:
 @click.option("--no-browser", is_flag=True, help="Do not open the page in a browser.")
 def explore(port, host, no_browser):
     """Interactive BRDF explorer in the browser (lit sphere, lobes, albedo, verdict, exports)."""
-    from .explorer import serve
+    from .explorer import bind, serve
 
+    try:
+        sock = bind(host, port)         # before the URL is announced: a busy port fails here
+    except ValueError as e:
+        _fail(str(e))
     console.print(f"plausible explorer on http://{host}:{port}/ (Ctrl-C to stop)", soft_wrap=True)
     try:
-        serve(host=host, port=port, open_browser=not no_browser)
+        serve(host=host, port=port, open_browser=not no_browser, sock=sock)
     except KeyboardInterrupt:
         pass
 
@@ -521,45 +678,78 @@ def figures(out, only, spp, resolution, quick, force, list_only):
 @main.command("export")
 @click.argument("model")
 @PARAM_OPT
-@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf"]), default="glsl", show_default=True,
-              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file.")
-@click.option("--out", required=True, type=click.Path(dir_okay=False), help="File to write.")
+@click.option("--format", "fmt", type=click.Choice(["glsl", "brdf", "js"]), default="glsl", show_default=True,
+              help="glsl: a GLSL ES 3.00 function plausible_f(wi, wo); brdf: a Disney BRDF Explorer file; "
+                   "js: an ES module for three.js / WebGL2 (GLSL, uniforms' values, tables as textures).")
+@click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
+              help="File to write; - writes to standard output.")
 @click.option("--uniforms", is_flag=True, help="glsl: parameters as uniforms instead of constants.")
-def export_cmd(model, params, fmt, out, uniforms):
+@click.option("--prefix", default="plausible", show_default=True, metavar="NAME",
+              help="glsl, js: prefix of the exported names (NAME_f, NAME_pdf, uniforms NAME_n), so that "
+                   "several exports share one shader.")
+@click.option("--table-limit", type=click.IntRange(min=1), default=None, metavar="N",
+              help="brdf: resample tables of more than N values (default 1200; the file states the "
+                   "interpolation error).")
+def export_cmd(model, params, fmt, out, uniforms, prefix, table_limit):
     """Export MODEL as a shader (see docs/export.md)."""
-    from .export import write
+    from .export import BRDF_TABLE_LIMIT, check_prefix, write
 
+    try:
+        check_prefix(prefix, "--prefix")
+    except ValueError as e:
+        _fail(str(e))
     m = _model(model, params)
     try:
-        write(m, fmt, out, uniforms=uniforms)
+        text = write(m, fmt, None if out == "-" else out, uniforms=uniforms, prefix=prefix,
+                     table_limit=table_limit or BRDF_TABLE_LIMIT)
     except ValueError as e:
         _fail(str(e))
     except OSError as e:
         _fail(f"cannot write {out}: {e.strerror}")
-    click.echo(f"wrote {out} ({fmt}, {m!r})")
+    if out == "-":          # the text alone on stdout (pipe it); the note on stderr
+        click.echo(text, nl=False)
+        click.echo(f"wrote standard output ({fmt}, {m!r})", err=True)
+    else:
+        click.echo(f"wrote {out} ({fmt}, {m!r})")
 
 
 @main.command()
-@click.option("--fit", "fit", metavar="FIT", help="List only the materials of this fit set.")
+@click.option("--fit", "fit", metavar="FIT", help="Only this fit set and its materials.")
 @click.option("--fits", "fits_only", is_flag=True, help="List only the fit sets.")
-def materials(fit, fits_only):
+@click.option("--json", "as_json", is_flag=True, help="Print the fit sets and materials as JSON.")
+def materials(fit, fits_only, as_json):
     """The published fits of the MERL materials (Ngan et al. 2005, Löw et al. 2012):
-    fit sets, then every material with its fits.  Use one as material:NAME@FIT."""
+    fit sets, then every material with its fits.  Use one as material:NAME@FIT.
+    A fit set that cannot be loaded is marked in the first table and left out
+    of the materials' lists."""
     from . import library
 
+    try:
+        sets = [library.fit_set(fit)] if fit else library.fits()
+        mats = library.materials(fit)
+    except ValueError as e:
+        _fail(str(e))
+    loadable = {fs.key for fs in library.fits() if fs.built}
+    mats = {name: tuple(k for k in keys if k in loadable) for name, keys in mats.items()}
+    mats = {name: keys for name, keys in mats.items() if keys}
+    if as_json:
+        out = dict(fits=[dict(key=fs.key, model=fs.model, materials=len(library.fit_data(fs.key)),
+                              description=fs.description, loadable=fs.built, reason=fs.reason or None)
+                         for fs in sets])
+        if not fits_only:
+            out["materials"] = {name: list(keys) for name, keys in mats.items()}
+        return _echo_json(out)
     t = Table(title="published fit sets (use as material:NAME@FIT)")
     for col in ("fit", "bbm model", "materials", "what it is"):
         t.add_column(col)
-    for fs in library.fits():
-        what = fs.description if fs.built else f"[red]not loadable:[/red] {fs.reason}"
+    for fs in sets:
+        what = fs.description if fs.built else f"[red]not loadable:[/red] {escape(fs.reason)}"
         t.add_row(fs.key, fs.model, str(len(library.fit_data(fs.key))), what)
     console.print(t)
     if fits_only:
         return
-    try:
-        mats = library.materials(fit)
-    except ValueError as e:
-        _fail(str(e))
+    if fit and fit not in loadable:
+        _fail(f"fit {fit!r} cannot be loaded: {library.fit_set(fit).reason}")
     t = Table(title=f"materials ({len(mats)})" + (f" of {fit}" if fit else ""))
     t.add_column("material", style="bold", no_wrap=True)
     t.add_column("fits")

@@ -7,6 +7,7 @@ command line (``plausible models``), the Mitsuba plugins and the tests read them
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,6 +51,10 @@ class Param:
             if value not in self.choices:
                 raise ValueError(f"{where} must be one of {self.range_text()}, got {value!r}")
             return value
+        if isinstance(value, (bool, np.bool_)) or (isinstance(value, (list, tuple)) and
+                                                   any(isinstance(x, (bool, np.bool_)) for x in value)):
+            raise ValueError(f"{where} must be a number in {self.range_text()}, got {value!r} "
+                             f"(a boolean is not a number)")
         if self.kind == "color":
             try:
                 arr = np.asarray(value, dtype=np.float64)
@@ -59,6 +64,9 @@ class Param:
             if arr.ndim > 1 or arr.size == 0:
                 raise ValueError(f"{where} must be a scalar or a 1-D channel array "
                                  f"(e.g. RGB), got shape {arr.shape}")
+            if arr.ndim == 1 and arr.size not in COLOR_CHANNELS:
+                raise ValueError(f"{where} must be a number or {' or '.join(map(str, COLOR_CHANNELS))} "
+                                 f"channels (grey or RGB), got {arr.size} channels")
             if not np.all(np.isfinite(arr)) or np.any(arr < self.lo) or np.any(arr > self.hi):
                 raise ValueError(f"{where} must lie in {self.range_text()}, got {value!r}")
             return float(arr) if arr.ndim == 0 else arr
@@ -74,6 +82,10 @@ class Param:
                 raise ValueError(f"{where} must be an integer in {self.range_text()}, got {value!r}")
             return int(x)
         return x
+
+
+#: Channel counts a colour parameter may have (grey, RGB).
+COLOR_CHANNELS = (1, 3)
 
 
 @dataclass(frozen=True)
@@ -100,11 +112,13 @@ def parse_groups(text: str) -> list:
     by commas or spaces (the one parser of structured values, used by the command
     line through :func:`parse_value` and by the Mitsuba plugins' string properties).
 
-    ``"-1 -1 1 20 1.75; 1,1,1,5,0.1"`` -> ``[[-1.0, -1.0, 1.0, 20.0, 1.75], [1.0, 1.0, 1.0, 5.0, 0.1]]``.
+    ``"-1 -1 1 20 1.75; 1,1,1,5,0.1"`` -> ``[[-1.0, -1.0, 1.0, 20.0, 1.75], [1.0, 1.0, 1.0, 5.0, 0.1]]``;
+    the tuple form ``"(-1, -1, 1, 20, 1.75), (1, 1, 1, 5, 0.1)"`` gives the same.
     A word raises :class:`ValueError` naming the group and the text given.
     """
+    groups = _parenthesised(text) if "(" in text or ")" in text else text.split(";")
     out = []
-    for g in text.split(";"):
+    for g in groups:
         if not g.strip():
             continue
         try:
@@ -113,6 +127,21 @@ def parse_groups(text: str) -> list:
             raise ValueError(f"groups of numbers separated by ';' (numbers by commas or spaces) "
                              f"expected, got {g.strip()!r} in {text!r}") from None
     return out
+
+
+def _parenthesised(text: str) -> list:
+    """The groups of ``"(a, b), (c, d)"`` or ``"[(a, b), (c, d)]"`` (the form Python
+    and ``plausible models`` print a tuple of tuples in); between the groups only
+    commas, semicolons and spaces."""
+    body = text.strip()
+    if body.startswith("[") and body.endswith("]"):
+        body = body[1:-1]
+    groups = re.findall(r"\(([^()]*)\)", body)
+    rest = re.sub(r"\(([^()]*)\)", " ", body)
+    if not groups or rest.strip(" ,;\t"):
+        raise ValueError(f"groups of numbers in parentheses, '(a, b, c), (d, e, f)', or separated by ';' "
+                         f"expected, got {text!r}")
+    return groups
 
 
 def format_groups(value) -> str:
@@ -124,7 +153,7 @@ def parse_value(text: str):
     """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour), groups
     separated by ``;`` (``-1,-1,1,20,1.5;1,1,1,8,0.3``: a list of tuples, e.g.
     Lafortune's lobes; :func:`parse_groups`) or a word."""
-    if ";" in text:
+    if ";" in text or text.lstrip().startswith(("(", "[(")):
         return parse_groups(text)
     parts = [t.strip() for t in text.split(",")]
     try:

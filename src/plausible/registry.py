@@ -63,13 +63,21 @@ def info(name: str) -> ModelInfo:
     _load()
     try:
         return _REGISTRY[name]
-    except KeyError:
-        raise ValueError(f"unknown model {name!r}; registered models: "
+    except (KeyError, TypeError):
+        import difflib
+
+        close = difflib.get_close_matches(str(name), list(_REGISTRY), n=3, cutoff=0.6)
+        hint = f" (did you mean {' or '.join(close)}?)" if close else ""
+        raise ValueError(f"unknown model {name!r}{hint}; registered models: "
                          f"{', '.join(sorted(_REGISTRY))}") from None
 
 
 def make(name: str, **params):
-    """Build the registered model ``name`` with ``params`` (defaults for the rest)."""
+    """Build the registered model ``name`` with ``params`` (defaults for the rest).
+    ``name`` may be a spec, ``"ashikhmin-shirley:nu=10"`` or ``"material:NAME@FIT"``
+    (:func:`make_from_spec`; ``params`` then add to or override the spec's)."""
+    if isinstance(name, str) and ":" in name:
+        return make_from_spec(name, **params)
     return info(name).cls(**params)
 
 
@@ -85,18 +93,31 @@ def parse_assignments(items) -> dict:
         if not k.strip():
             raise ValueError(f"parameter assignment {it!r} has no name before '=' (write name=value, "
                              f"e.g. n=20)")
-        out[k.strip()] = parse_value(v)
+        try:
+            out[k.strip()] = parse_value(v)
+        except ValueError as e:
+            raise ValueError(f"parameter '{k.strip()}': {e}") from None
     return out
+
+
+#: Deepest nesting of model specs in square brackets (``pumped-up:base=[pumped-up:base=[...]]``):
+#: the work of building a nested pumped-up model grows with the cube of the depth (each
+#: level tabulates the albedo of the one below), and Python's recursion ends at ~200.
+MAX_SPEC_DEPTH = 4
 
 
 def split_spec(spec: str) -> list[str]:
     """Split ``"name:k=v:k=[name2:k=v]"`` at the colons outside square brackets
     (a bracketed value is a nested spec, e.g. the base of ``pumped-up``); the
-    brackets are removed."""
+    brackets are removed.  At most :data:`MAX_SPEC_DEPTH` levels of brackets."""
     parts, depth, cur = [], 0, ""
     for ch in spec:
         if ch == "[":
             depth += 1
+            if depth > MAX_SPEC_DEPTH:
+                raise ValueError(f"model spec nests more than {MAX_SPEC_DEPTH} levels of '[...]' "
+                                 f"(at most {MAX_SPEC_DEPTH} allowed): {spec[:80]!r}"
+                                 + ("..." if len(spec) > 80 else ""))
             if depth == 1:
                 continue
         elif ch == "]":
@@ -159,4 +180,33 @@ def make_from_spec(spec: str, **extra):
     name, *assign = split_spec(spec)
     params = parse_assignments(assign)
     params.update(extra)
-    return make(name.strip(), **params)
+    try:
+        return info(name.strip()).cls(**params)
+    except ValueError as e:
+        hint = "" if "[" in spec else _bracket_hint(name.strip(), assign)
+        if hint:
+            raise ValueError(f"{e}. A nested model's parameters go in square brackets: {hint!r}") from None
+        raise
+
+
+def _bracket_hint(name: str, assign: list) -> str:
+    """The spec with brackets where a model-valued parameter (pumped-up's
+    ``base``) is followed by parameters the outer model does not have:
+    ``pumped-up:base=reciprocal-phong:ks=1:n=20`` -> ``pumped-up:base=[reciprocal-phong:ks=1:n=20]``
+    ("" when there is no such parameter)."""
+    try:
+        inf = info(name)
+    except ValueError:
+        return ""
+    own = {p.name for p in inf.params}
+    nested_kind = {p.name for p in inf.params if p.kind == "model"}
+    keys = [a.split("=", 1)[0].strip() for a in assign]
+    for i, k in enumerate(keys):
+        if k in nested_kind:
+            j = i + 1
+            while j < len(keys) and keys[j] not in own:
+                j += 1
+            if j > i + 1:
+                inner = ":".join([assign[i].split("=", 1)[1]] + assign[i + 1:j])
+                return ":".join([name, *assign[:i], f"{k}=[{inner}]", *assign[j:]])
+    return ""

@@ -102,6 +102,32 @@ class AngleTable:
         st = np.sin(t)
         return self.lookup(NP, (st * np.cos(p), st * np.sin(p), np.cos(t)))
 
+    @property
+    def size(self) -> int:
+        """The number of stored values, ghost nodes included (what a shader holds)."""
+        return len(self._padded)
+
+    def resampled(self, n_theta: int, n_phi: int | None = None) -> "AngleTable":
+        """The table on a grid of ``n_theta`` (and ``n_phi``) nodes, its values
+        this table's interpolation there (a smaller table for hosts that compile
+        tables as code; :meth:`difference` says what it costs)."""
+        if self.isotropic:
+            return AngleTable(self.lookup_angles(np.linspace(0.0, HALF_PI, n_theta)))
+        return AngleTable(self.lookup_angles(np.linspace(0.0, HALF_PI, n_theta),
+                                             np.arange(n_phi) * (TWO_PI / n_phi)))
+
+    def difference(self, other: "AngleTable") -> float:
+        """``max |other - self| / max(|self|, 1e-12)`` over this table's nodes and
+        the midpoints between them (in ``theta`` and in ``phi``): the relative
+        error of ``other`` read as an approximation of ``self``."""
+        t = np.linspace(0.0, HALF_PI, 2 * self.n_theta - 1)
+        if self.isotropic:
+            a, b = self.lookup_angles(t), other.lookup_angles(t)
+        else:
+            ph = np.arange(2 * self.n_phi) * (math.pi / self.n_phi)
+            a, b = self.lookup_angles(t, ph), other.lookup_angles(t, ph)
+        return float(np.max(np.abs(b - a) / np.maximum(np.abs(a), 1e-12)))
+
     def lookup(self, ops, w):
         """The interpolated value at the directions ``w = (x, y, z)`` (unit vectors;
         ``theta`` is clamped to ``[0, pi/2]``)."""

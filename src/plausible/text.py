@@ -4,6 +4,8 @@
   text; the model ``repr`` (also the pumped-up table cache key), the command
   line's tables, fit summaries and the figures report use it with their own
   number format and separators.
+* :func:`html_table` -- a small HTML table, the ``_repr_html_`` of models,
+  reports and results in a notebook.
 * :func:`jsonable` -- plain JSON data from results holding NumPy arrays and
   scalars (non-finite numbers become the strings ``"inf"``, ``"nan"``, which
   strict JSON readers accept).
@@ -60,4 +62,17 @@ def jsonable(x):
     return x
 
 
-__all__ = ["fmt", "jsonable"]
+def html_table(caption: str, header, rows) -> str:
+    """An HTML ``<table>`` (every cell escaped) with a caption, for notebooks.
+
+    >>> html_table("m", ["k", "v"], [["n", 20]])
+    '<table><caption>m</caption><tr><th>k</th><th>v</th></tr><tr><td>n</td><td>20</td></tr></table>'
+    """
+    from html import escape
+
+    head = "".join(f"<th>{escape(str(h))}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><caption>{escape(str(caption))}</caption><tr>{head}</tr>{body}</table>"
+
+
+__all__ = ["fmt", "html_table", "jsonable"]

@@ -7,6 +7,8 @@ second tangent ``v``.
 
 from __future__ import annotations
 
+import math
+
 
 def dot(a, b):
     """Scalar product ``a . b``."""
@@ -85,3 +87,56 @@ def to_world(local, s, t, n):
         local[0] * s[1] + local[1] * t[1] + local[2] * n[1],
         local[0] * s[2] + local[1] * t[2] + local[2] * n[2],
     )
+
+
+# -- angles <-> directions (NumPy; the library's angles are radians) -----------------
+
+def direction(theta, phi=0.0):
+    """Unit vector(s) with polar angle ``theta`` from the normal and azimuth
+    ``phi`` from the tangent ``x``, both in **radians** (the unit of every
+    library function; degrees only where a name says ``_deg``, and on the
+    command line).  Arrays broadcast: shape ``broadcast(theta, phi) + (3,)``.
+    Inverse: :func:`angles`.
+
+    ``theta`` must lie in ``[0, pi]``: a larger value is refused as likely
+    degrees (write ``math.radians(30)``).
+
+    >>> direction(0.0)
+    array([0., 0., 1.])
+    """
+    import numpy as np
+
+    t = np.asarray(theta, dtype=np.float64)
+    p = np.asarray(phi, dtype=np.float64)
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
+        raise ValueError(f"theta and phi must be finite angles in radians, got theta={theta!r}, phi={phi!r}")
+    if np.any(t < 0) or np.any(t > math.pi):
+        bad = float(t[(t < 0) | (t > math.pi)].flat[0])
+        hint = f" (degrees? use math.radians({bad:g}) = {math.radians(bad):.6g})" if bad > math.pi else ""
+        raise ValueError(f"theta must be a polar angle in radians, within [0, pi], got {bad:g}{hint}")
+    s = np.sin(t)
+    out = np.stack(np.broadcast_arrays(s * np.cos(p), s * np.sin(p), np.cos(t)), axis=-1)
+    return out
+
+
+def angles(w):
+    """``(theta, phi)`` in radians of direction(s) ``w`` (shape ``(..., 3)``, any
+    length): ``theta`` in ``[0, pi]`` from the normal, ``phi`` in ``(-pi, pi]``
+    from the tangent ``x`` (0 on the normal).  Inverse of :func:`direction`.
+
+    >>> [round(float(a), 12) for a in angles(direction(0.5, 1.0))]
+    [0.5, 1.0]
+    """
+    import numpy as np
+
+    u = np.asarray(w, dtype=np.float64)
+    if u.ndim == 0 or u.shape[-1] != 3:
+        raise ValueError(f"w must be direction(s) of shape (..., 3), got shape {u.shape}")
+    r = np.sqrt(u[..., 0] ** 2 + u[..., 1] ** 2 + u[..., 2] ** 2)
+    if not np.all(np.isfinite(r)) or np.any(r == 0):
+        raise ValueError("w must be finite, non-zero vectors (a zero vector has no direction)")
+    theta = np.arccos(np.clip(u[..., 2] / r, -1.0, 1.0))
+    phi = np.arctan2(u[..., 1], u[..., 0])
+    if u.ndim == 1:
+        return float(theta), float(phi)
+    return theta, phi

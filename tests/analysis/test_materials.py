@@ -12,13 +12,13 @@ from plausible.analysis.materials import check_fit, check_model, markdown, summa
 from plausible.models.sum import Sum
 
 
-#: A short grid keeps the tests fast (the table uses THETAS).
+#: A short grid keeps the tests fast (the table uses THETAS_DEG).
 GRID = (0.0, 60.0, 89.9)
 
 
 @pytest.fixture(scope="module")
 def row():
-    return check_fit("nickel", "ngan2005/ward-duer", thetas=GRID)
+    return check_fit("nickel", "ngan2005/ward-duer", thetas_deg=GRID)
 
 
 def test_the_rows_largest_albedo_is_plausible_albedo_of_the_material(row):
@@ -33,7 +33,7 @@ def test_the_rows_largest_albedo_is_plausible_albedo_of_the_material(row):
 
 def test_the_rows_asymmetry_is_plausible_reciprocity(row):
     assert row.asymmetry == plausible.reciprocity(plausible.material("nickel", "ngan2005/ward-duer")).figure
-    assert row.reciprocal and row.thetas == GRID
+    assert row.reciprocal and row.thetas_deg == GRID
 
 
 def test_a_model_that_gains_energy_is_flagged_with_where():
@@ -50,7 +50,7 @@ def test_a_non_reciprocal_part_is_flagged():
 
 
 def test_a_plausible_material_passes_and_the_summary_counts_it(row):
-    ok = check_fit("nickel", "ngan2005/ashikhmin-shirley", thetas=GRID)
+    ok = check_fit("nickel", "ngan2005/ashikhmin-shirley", thetas_deg=GRID)
     assert ok.reciprocal and not ok.gains_energy
     s = summary([row, ok])
     assert [x["n"] for x in s] == [1, 1]

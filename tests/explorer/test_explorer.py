@@ -26,7 +26,7 @@ from plausible.explorer.app import create_app  # noqa: E402
 
 @pytest.fixture(scope="module")
 def client():
-    return TestClient(create_app())
+    return TestClient(create_app(), base_url="http://127.0.0.1")
 
 
 def test_models_lists_every_registered_model(client):
@@ -288,3 +288,125 @@ def test_a_material_can_be_selected_in_the_page(page):
     want = views.plane(plausible.material("gold-metallic-paint"), asked["theta_i"])["fcos"]
     assert np.allclose(page.evaluate("window.explorer.data.A.plane.fcos"), want, rtol=1e-12)
     assert page.locator("#status").inner_text() == "" and page.errors == []
+
+
+# -- what a user meets first (issue 29) ---------------------------------------------------
+
+def test_a_pending_verdict_says_computing_and_the_old_one_goes(page):
+    page.select_option("#model-A", "lambertian")
+    page.wait_for_function("window.explorer.data.A.verdict", timeout=60_000)
+    page.select_option("#model-A", "reciprocal-phong")
+    # at once: no verdict of the previous model, a sign that one is coming
+    assert "computing" in page.locator("#verdict-A").inner_text()
+    assert "lambertian" not in page.locator("#verdict-A").inner_text()
+    page.wait_for_function("window.explorer.data.A.verdict", timeout=60_000)
+    text = page.locator("#verdict-A").inner_text()
+    assert "computing" not in text and "reciprocal-phong" in text
+
+
+def _set_number(page, name, value):
+    box = page.locator(f"#params-A [data-param={name}] input[type=number]")
+    box.fill(str(value))
+    box.dispatch_event("change")
+
+
+def test_a_refused_parameter_set_goes_back_to_the_last_valid_one(page):
+    page.select_option("#model-A", "modified-phong")
+    page.wait_for_function("window.explorer.sides.A.name === 'modified-phong' && window.explorer.data.A.plane")
+    _idle(page)
+    # kd, ks are colours; n is the scalar with a number box: set a valid n first, then a refused kd
+    _set_number(page, "n", 12)
+    page.wait_for_timeout(300)
+    _idle(page)
+    assert page.evaluate("window.explorer.data.A.asked.params.n") == 12
+    before = _sphere(page)
+    # a colour slider to full brightness: kd = 1 with ks = 0.2 breaks kd + ks <= 1
+    page.locator("#params-A [data-param=kd] input[type=range]").fill("1")
+    page.wait_for_timeout(300)
+    _idle(page)
+    page.wait_for_timeout(300)
+    _idle(page)
+    status = page.locator("#status").inner_text()
+    assert "refused" in status and "kd' + 'ks' must not exceed 1" in status and "Back to the last valid" in status
+    assert "array(" not in status and "[1.2 1.2 1.2]" not in status and "[1.2, 1.2, 1.2]" in status
+    params = page.evaluate("window.explorer.sides.A.params")
+    assert params["kd"] == 0.5 and params["n"] == 12                # the defaults' kd, the accepted n
+    assert page.evaluate("window.explorer.data.A.asked.params") == params   # the plots show those values
+    slider = float(page.locator("#params-A [data-param=kd] input[type=range]").input_value())
+    assert slider == pytest.approx(0.5, abs=1e-3)                   # the control shows them too
+    assert _sphere(page) == before                                  # and the sphere
+    want = views.plane(plausible.make("modified-phong", n=12), page.evaluate("window.explorer.thetaI"))["fcos"]
+    assert np.allclose(page.evaluate("window.explorer.data.A.plane.fcos"), want, rtol=1e-12)
+
+
+def test_the_albedo_axis_covers_the_curves_and_names_the_channel_mean(page):
+    page.select_option("#model-A", "phong")          # the original Phong gains energy toward grazing
+    page.wait_for_function("window.explorer.sides.A.name === 'phong' && window.explorer.data.A.albedo", timeout=60_000)
+    _idle(page)
+    a = page.evaluate("window.explorer.data.A.albedo")
+    axis = page.evaluate("window.explorer.albedoAxis")
+    highest = max(max(v + e for v, e in zip(a["value"], a["error"])), max(a["max"]))
+    assert highest > 1.0 and axis["top"] >= highest and axis["ticks"][-1] >= 1.0
+    assert page.locator("#albedo-note").inner_text() == ""           # a grey model: nothing to say
+    page.select_option("#model-A", "material")
+    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.albedo",
+                           timeout=60_000)
+    _idle(page)
+    assert "channel mean" in page.locator("#albedo-note").inner_text()
+    assert "A: mean of its 3 channels" in page.locator("#albedo-note").inner_text()
+
+
+def test_the_verdict_is_in_view_at_1280x720(page):
+    page.set_viewport_size({"width": 1280, "height": 720})
+    page.select_option("#model-A", "ward")
+    page.wait_for_function("window.explorer.sides.A.name === 'ward' && window.explorer.data.A.verdict", timeout=60_000)
+    page.evaluate("window.scrollTo(0, 0)")
+    box = page.locator("#verdict-A").bounding_box()
+    assert box["height"] > 20 and box["y"] >= 0 and box["y"] + box["height"] <= 720
+
+
+def test_compare_draws_each_lobe_to_its_own_scale(page):
+    page.select_option("#model-A", "reciprocal-phong")      # a lobe 12 times the Lambertian's height
+    page.wait_for_function("window.explorer.sides.A.name === 'reciprocal-phong' && window.explorer.data.A.plane")
+    page.select_option("#model-B", "lambertian")
+    page.wait_for_function("window.explorer.sides.B && window.explorer.data.B.plane", timeout=60_000)
+    _idle(page)
+    page.evaluate("window.explorer.perLobe || document.getElementById('per-lobe').click()")
+    scale = page.evaluate("window.explorer.plotScale")
+    for k in "AB":
+        assert scale[k] == max(page.evaluate(f"window.explorer.data.{k}.plane.fcos"))   # each reaches the rim
+    assert scale["A"] > 3 * scale["B"]
+    assert "each lobe to its own scale" in page.evaluate("document.getElementById('per-lobe').parentNode.innerText")
+    page.locator("#per-lobe").click()                                  # one shared scale again
+    scale = page.evaluate("window.explorer.plotScale")
+    assert scale["A"] == scale["B"] == max(page.evaluate("window.explorer.data.A.plane.fcos"))
+    page.locator("#per-lobe").click()
+    page.select_option("#model-B", "")
+
+
+def test_incidence_goes_to_89_9_degrees(page):
+    page.select_option("#model-A", "lambertian")
+    page.wait_for_function("window.explorer.sides.A.name === 'lambertian' && window.explorer.data.A.plane")
+    page.locator("#theta-i").fill("89.9")
+    page.wait_for_timeout(300)
+    _idle(page)
+    assert page.evaluate("window.explorer.data.A.asked.theta_i") == 89.9
+    assert page.locator("#theta-i-out").inner_text() == "89.9°"
+    want = views.plane(plausible.make("lambertian"), 89.9)["fcos"]
+    assert np.allclose(page.evaluate("window.explorer.data.A.plane.fcos"), want, rtol=1e-12)
+    page.locator("#theta-i").fill("30")
+    page.wait_for_timeout(300)
+    _idle(page)
+
+
+def test_the_slice_has_a_colour_bar_with_its_maximum(page, client):
+    page.select_option("#model-A", "ward")
+    page.wait_for_function("window.explorer.sides.A.name === 'ward' && window.explorer.data.A.slice", timeout=60_000)
+    _idle(page)
+    top = max(map(max, client.post("/api/slice", json={"model": "ward", "params": {}}).json()["f"]))
+    label = page.locator("#slice-scale").inner_text()
+    assert f"A {float(f'{top:.4g}'):.4g}"[:6] in label.replace("\n", " ") and "10⁻⁴ max" in label
+    # the bar: viridis, bright at the top, dark at the bottom
+    px = page.evaluate("""() => { const g = document.getElementById('slice-bar').getContext('2d');
+        return [Array.from(g.getImageData(5, 0, 1, 1).data), Array.from(g.getImageData(5, 191, 1, 1).data)]; }""")
+    assert px[0][:3] == [253, 231, 37] and px[1][:3] == [68, 1, 84]

@@ -209,7 +209,9 @@ def test_brdf_files_agree_with_numpy_through_the_explorer_signature(browser):
     to_world = lambda w: (w.astype(np.float64) @ frame).astype(np.float32)  # noqa: E731
     lw, vw = to_world(wi), to_world(wo)
     browser.set_inputs([lw, vw])
-    models = [plausible.make(nm) for nm in plausible.names()] + [plausible.make("modified-phong", n=1e4)]
+    models = [plausible.make(nm) for nm in plausible.names()] + [plausible.make("modified-phong", n=1e4)] + [
+        plausible.make(nm, fresnel="conductor", eta=[0.2, 0.9, 1.1], k=[3.9, 2.4, 2.2])   # eta_r, k_g, ... sliders
+        for nm in ("cook-torrance", "neumann-metal")]
     res = browser.run([brdf_job(to_brdf(m), x, y, n) for m in models])
     refs = []
     for m in models:
@@ -218,3 +220,36 @@ def test_brdf_files_agree_with_numpy_through_the_explorer_signature(browser):
         r = m._eval_block(li, vi, (len(li),))
         refs.append(np.broadcast_to(r[:, None] if r.ndim == 1 else r, (len(li), 3)))
     assert worst([m.name for m in models], res, refs) == []
+
+
+def test_two_prefixed_exports_in_one_shader_agree_with_numpy(browser, pairs):
+    """Ashikhmin-Shirley (uniforms, prefix 'as') and Lafortune (baked, prefix 'laf')
+    in one fragment shader, sharing the guarded helpers: each equals NumPy."""
+    wi, wo = pairs
+    m_as = plausible.make("ashikhmin-shirley", nu=20.0, nv=400.0)
+    m_laf = plausible.make("lafortune", lobes=[(-1, -1, 1, 1e3, 50.0), (0.5, 0.5, 1.0, 8.0, 0.2)], rd=0.1)
+    a, b = to_glsl(m_as, uniforms=True, prefix="as"), to_glsl(m_laf, prefix="laf")
+    code = a.text + b.text
+    uni = {u.name: list(u.value) for u in a.uniforms}
+    browser.set_inputs([wi, wo])
+    got = browser.run([((code, f"outColor = vec4({p}_f(a.xyz, b.xyz), 1.0);"), uni) for p in ("as", "laf")])
+    refs = [reference_f(m, wi, wo) for m in (m_as, m_laf)]
+    assert worst(["as", "laf"], got, refs) == []
+
+
+def test_a_resampled_table_in_a_brdf_file_stays_within_its_stated_error(browser):
+    """A .brdf file whose albedo table was resampled (here the 93 values of the
+    default pumped-up to at most 20) against NumPy with the full table: its
+    error exceeds the float32 criterion (a different table) but stays within
+    the interpolation error the file states (g = max(a(L), a(V)) divides f)."""
+    import re
+
+    m = plausible.make("pumped-up")
+    text = to_brdf(m, table_limit=20)
+    stated = float(re.search(r"interpolation error at most ([0-9.e+-]+)", text).group(1))
+    wi, wo = direction_pairs(seed=5)
+    x, y, n = (np.eye(3, dtype=np.float32)[k] for k in range(3))
+    browser.set_inputs([wi, wo])
+    got, = browser.run([brdf_job(text, x, y, n)])
+    err = relative_errors(got[:, :3], reference_f(m, wi, wo)).max()
+    assert RTOL < err <= stated + RTOL

@@ -175,3 +175,85 @@ def test_fit_targets_sit_at_cell_centres(tmp_path):
     for _ in range(3):     # 1e-9 rad from a centre is deep inside its cell
         d = wo + rng.normal(size=wo.shape) * 1e-9
         assert np.array_equal(r.eval(wi, d), r.eval(wi, wo))
+
+
+# -- where a MERL target is compared: both tangents (issue 29) ----------------------
+
+@pytest.fixture(scope="module")
+def ward_table():
+    truth = plausible.make("ward", alpha_x=0.2, alpha_y=0.2, rs=0.2, rd=0.3)
+    return MerlBRDF(tabulate(truth))
+
+
+def test_from_half_diff_places_the_half_vector_at_phi_h():
+    from plausible.fitting.merl import from_half_diff, half_diff
+    from plausible.ops import NP
+
+    th, td, pd, ph = 0.4, 0.7, 1.1, np.array([0.0, 0.9, 2.5, -2.0])
+    wi, wo = from_half_diff(th, td, pd, ph)
+    h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
+    np.testing.assert_allclose(np.arctan2(h[:, 1], h[:, 0]), ph, atol=1e-12)
+    for got, want in zip(half_diff(NP, tuple(wi.T), tuple(wo.T)), (th, td, pd)):
+        np.testing.assert_allclose(got, want, atol=1e-12)
+
+
+def test_measured_pairs_point_half_vectors_along_both_tangents(ward_table):
+    from plausible.fitting import metrics as M
+
+    wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
+    h = wi + wo
+    phi_h = np.arctan2(h[:, 1], h[:, 0])
+    # the azimuths spread evenly: each quarter of the circle holds a quarter of the pairs
+    counts = np.histogram(np.mod(phi_h, 2 * np.pi), bins=4, range=(0, 2 * np.pi))[0]
+    assert np.all(np.abs(counts / len(wi) - 0.25) < 0.01)
+    # and each pair still lies in the cell it stands for (the reference reader's lookup)
+    for k in range(0, len(wi), 97):
+        assert _ref_index(wi[k], wo[k]) == _ref_index(*_at_phi_h_zero(wi[k], wo[k]))
+
+
+def _at_phi_h_zero(wi, wo):
+    h = wi + wo
+    a = -math.atan2(h[1], h[0])
+    return _rotate(wi, [0, 0, 1], a), _rotate(wo, [0, 0, 1], a)
+
+
+def test_an_anisotropic_fit_to_a_merl_table_recovers_both_roughnesses(ward_table):
+    # the pairs of the fit to a MERL file (table targets: no albedo integration, fast)
+    from plausible.fitting import fit, metrics as M
+
+    wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
+    r = fit("ward", (wi, wo, ward_table.eval(wi, wo)), "l2-cos", starts=1, fixed={"rd": 0.3})
+    assert r.params["alpha_x"] == pytest.approx(0.2, rel=1e-6)
+    assert r.params["alpha_y"] == pytest.approx(0.2, rel=1e-6)
+    assert np.allclose(r.params["rs"], 0.2, rtol=1e-6) and r.unconstrained == []
+
+
+def test_a_fit_the_samples_do_not_decide_warns(ward_table):
+    # every half vector at phi_h = 0 (h_y = 0): Ward's alpha_y only scales the lobe, as rs does
+    from plausible.fitting import UnconstrainedWarning, fit, metrics as M
+    from plausible.fitting.merl import from_half_diff, half_diff
+    from plausible.ops import NP
+
+    wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
+    wi, wo = from_half_diff(*half_diff(NP, tuple(wi.T), tuple(wo.T)))
+    assert np.max(np.abs((wi + wo)[:, 1])) < 1e-12
+    with pytest.warns(UnconstrainedWarning, match="'alpha_y', 'rs' trade against each other"):
+        r = fit("ward", (wi, wo, ward_table.eval(wi, wo)), "l2-cos", starts=1, fixed={"rd": 0.3})
+    assert r.unconstrained == [["alpha_y", "rs"]] and r.to_dict()["unconstrained"] == [["alpha_y", "rs"]]
+
+
+def test_the_command_line_prints_the_unconstrained_warning(ward_table, tmp_path):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+    from plausible.fitting import metrics as M, save_table
+    from plausible.fitting.merl import from_half_diff, half_diff
+    from plausible.ops import NP
+
+    wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
+    wi, wo = from_half_diff(*half_diff(NP, tuple(wi.T), tuple(wo.T)))       # h_y = 0 everywhere
+    save_table(tmp_path / "t.csv", wi, wo, ward_table.eval(wi, wo))
+    r = CliRunner().invoke(main, ["fit", "ward", "--target", str(tmp_path / "t.csv"), "--metric", "l2-cos",
+                                  "--starts", "1", "-p", "rd=0.3"])
+    assert r.exit_code == 0, r.output
+    assert "warning:" in r.output and "'alpha_y', 'rs' trade against each other" in r.output

@@ -6,7 +6,7 @@ measures
 * reciprocity: :func:`plausible.analysis.reciprocity` of the whole model (the
   largest relative asymmetry ``|f(a,b) - f(b,a)| / max|f|`` over pairs of
   stratified directions);
-* energy: the directional albedo ``a(theta_i)`` on the grid :data:`THETAS`,
+* energy: the directional albedo ``a(theta_i)`` on the grid :data:`THETAS_DEG`,
   its largest value over angles and RGB channels, and where it occurs.
 
 The albedo of a :class:`~plausible.models.sum.Sum` is the sum of its parts'
@@ -34,7 +34,8 @@ from .checks import reciprocity
 
 #: Incidence angles (degrees) of the albedo grid: dense toward grazing, where
 #: Ward's and Cook-Torrance's albedos grow.
-THETAS = (0.0, 30.0, 60.0, 75.0, 85.0, 88.0, 89.5, 89.9)
+THETAS_DEG = (0.0, 30.0, 60.0, 75.0, 85.0, 88.0, 89.5, 89.9)
+THETAS = THETAS_DEG        # the name before the unit rule (degrees are named _deg)
 #: An albedo above ``1 + TOL`` gains energy (the integrator's accuracy is ~2e-5).
 TOL = 1e-4
 #: Reciprocity verdict: relative asymmetry at most this.
@@ -47,10 +48,10 @@ class FitCheck:
     """One row: ``material`` in fit set ``fit``.
 
     ``asymmetry`` the largest relative asymmetry (reciprocity); ``max_albedo`` the
-    largest directional albedo over :data:`THETAS` and channels, at ``theta_deg``
+    largest directional albedo over :data:`THETAS_DEG` and channels, at ``theta_deg``
     in channel ``channel``; ``albedo_normal`` the largest channel at normal
     incidence; ``error`` the integrator's error estimate of ``max_albedo``;
-    ``curve`` the largest channel's albedo at each angle of ``thetas``."""
+    ``curve`` the largest channel's albedo at each angle of ``thetas_deg`` (degrees)."""
 
     material: str
     fit: str
@@ -60,7 +61,7 @@ class FitCheck:
     channel: str
     albedo_normal: float
     error: float
-    thetas: tuple
+    thetas_deg: tuple
     curve: tuple
 
     @property
@@ -77,15 +78,15 @@ class FitCheck:
         return d
 
 
-def albedo_curve_of_sum(model, thetas=THETAS):
-    """``(values, errors)`` of shape ``(len(thetas), channels)``: the directional
+def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG):
+    """``(values, errors)`` of shape ``(len(thetas_deg), channels)``: the directional
     albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``."""
     ch = model.channels or 1
-    vals = np.zeros((len(thetas), ch))
-    errs = np.zeros((len(thetas), ch))
+    vals = np.zeros((len(thetas_deg), ch))
+    errs = np.zeros((len(thetas_deg), ch))
     for part, scale in zip(model.parts, model.scales):
         s = np.ones(ch) if scale is None else np.broadcast_to(np.asarray(scale, dtype=np.float64), (ch,))
-        for i, t in enumerate(thetas):
+        for i, t in enumerate(thetas_deg):
             r = albedo(part, direction(math.radians(t), 0.0))
             v = np.broadcast_to(np.asarray(r.value, dtype=np.float64), (ch,))
             e = np.broadcast_to(np.asarray(r.error, dtype=np.float64), (ch,))
@@ -94,24 +95,24 @@ def albedo_curve_of_sum(model, thetas=THETAS):
     return vals, errs
 
 
-def check_fit(name: str, fit: str, thetas=THETAS) -> FitCheck:
+def check_fit(name: str, fit: str, thetas_deg=THETAS_DEG) -> FitCheck:
     """The :class:`FitCheck` of one material of one fit set."""
-    return check_model(material(name, fit), name, fit, thetas)
+    return check_model(material(name, fit), name, fit, thetas_deg)
 
 
-def check_model(model, name: str = "", fit: str = "", thetas=THETAS) -> FitCheck:
+def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG) -> FitCheck:
     """The :class:`FitCheck` of any :class:`~plausible.models.sum.Sum` (``name``
     and ``fit`` only label the row)."""
     rec = reciprocity(model)
-    vals, errs = albedo_curve_of_sum(model, thetas)
+    vals, errs = albedo_curve_of_sum(model, thetas_deg)
     i, c = np.unravel_index(int(np.argmax(vals)), vals.shape)
-    return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas[i]),
+    return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas_deg[i]),
                     CHANNELS[c] if vals.shape[1] == 3 else "grey", float(np.max(vals[0])),
-                    float(errs[i, c]), tuple(float(t) for t in thetas),
+                    float(errs[i, c]), tuple(float(t) for t in thetas_deg),
                     tuple(float(x) for x in vals.max(axis=1)))
 
 
-def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None) -> list[FitCheck]:
+def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None) -> list[FitCheck]:
     """:func:`check_fit` of every material (or ``names``) of every loadable fit
     set (or ``fits``).  ``progress``, if given, is called with no argument after
     each fit.  Fit sets that cannot be loaded are skipped (see
@@ -125,7 +126,7 @@ def check_fits(fits=None, names=None, *, thetas=THETAS, progress=None) -> list[F
         for name in (names if names is not None else avail):
             if name not in avail:
                 continue
-            rows.append(check_fit(name, key, thetas))
+            rows.append(check_fit(name, key, thetas_deg))
             if progress:
                 progress()
     return rows
@@ -164,4 +165,5 @@ def markdown(rows, only_gains: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["FitCheck", "THETAS", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model", "markdown", "summary"]
+__all__ = ["FitCheck", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model",
+           "markdown", "summary"]

@@ -1,5 +1,10 @@
 """Deterministic quadrature over the hemisphere, refined toward a lobe.
 
+Two parametrisations: the half-vector frame of :func:`half_vector_breaks` (the
+albedo and pdf integrals of :mod:`plausible.analysis.albedo`: the mirror
+direction is the pole), and spherical angles about the normal (below; the
+chi-square cells and the fits' grids).
+
 Directions are parametrised by the spherical angles ``(theta, phi)`` about the
 normal, so the horizon ``theta = pi/2`` is an edge of the domain (a lobe clipped
 by the horizon needs no special care).  Both angles are cut into panels whose
@@ -113,3 +118,89 @@ def hemisphere_grid(wi, peaks, m: int = 12, levels: int = 13, theta_range=(0.0, 
                                       ct[:, None]), axis=-1)
     weight = (wt * st)[:, None] * wp[None, :]
     return HemisphereGrid(t, p, wo, weight)
+
+
+# -- the half-vector frame ------------------------------------------------------------------
+
+#: Geometric levels toward the pole of the half-vector frame (the mirror direction):
+#: panels down to ``2^-POLE_LEVELS`` of the polar range, ~1e-6 rad, a hundred times
+#: narrower than the narrowest declared lobe (Cook-Torrance and Ward at ``m = 1e-4``).
+POLE_LEVELS = 20
+#: Geometric levels toward the horizon (``s = 1``; the ``sqrt(cos theta_o)`` of Ward 1992).
+HORIZON_LEVELS = 8
+#: Deepest geometric grading in azimuth (toward the edge of the half-vector domain
+#: at grazing incidence, whose width is ``cot(theta_i)``).
+MAX_LEVELS = 40
+
+
+def half_vector_tmax(wi, phi):
+    """Largest polar angle of a half vector ``h(t, phi)`` whose mirror image of
+    ``wi`` lies above the horizon, for each azimuth ``phi`` (radians).
+
+    With ``wo = 2 (wi.h) h - wi`` and ``psi = phi - phi_i``,
+    ``wo_z = sin(theta_i) cos(psi) sin(2t) + cos(theta_i) cos(2t) = R cos(2t - delta)``,
+    ``delta = atan2(sin(theta_i) cos(psi), cos(theta_i))``; so ``wo_z > 0`` exactly for
+    ``t < pi/4 + delta/2`` (and then ``wi.h > 0`` too)."""
+    ti, pi_ = _angles(wi)
+    delta = np.arctan2(math.sin(ti) * np.cos(np.asarray(phi) - pi_), math.cos(ti))
+    return 0.25 * math.pi + 0.5 * delta
+
+
+def _grade(c, lo, hi, levels):
+    """``c`` and ``c +- (hi - lo) 2^-k``, ``k = 1..levels``."""
+    d = (hi - lo) * 0.5 ** np.arange(1, levels + 1)
+    return np.concatenate([[c], c + d, c - d])
+
+
+def _merge(lo, hi, pts):
+    b = np.unique(np.clip(np.concatenate(pts), lo, hi))
+    keep = np.concatenate([[True], np.diff(b) > 1e-13 * (hi - lo)])
+    return b[keep]
+
+
+def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels: int = POLE_LEVELS,
+                       axes: bool = True):
+    """Panel breakpoints ``(s_breaks, phi_breaks)`` of the half-vector frame for the
+    incidence ``wi`` (unit, ``wi_z > 0``) and lobe ``peaks``.
+
+    A direction ``wo`` is written through its half vector
+    ``h = (sin t cos phi, sin t sin phi, cos t)``, ``wo = 2 (wi.h) h - wi``,
+    ``d omega_o = 4 (wi.h) d omega_h``, and ``t = s tmax(phi)``
+    (:func:`half_vector_tmax`), ``s`` in ``[0, 1]``: the rectangle ``[0, 1] x
+    [phi_i - pi, phi_i + pi]`` covers the upper hemisphere once, the horizon is its
+    edge ``s = 1``, and the mirror direction, where every microfacet and
+    mirror-centred lobe peaks, is its edge ``s = 0`` whatever the incidence.
+    Breakpoints in ``s``: a uniform floor of ``8 refine`` panels, graded toward
+    ``s = 0`` down to ``2^-pole_levels`` (lobes of any width down to ``~1e-6`` rad),
+    toward the horizon and toward each other peak.  In ``phi``: ``16 refine``
+    panels, graded toward the plane of incidence, the peaks' azimuths, the
+    tangent axes if ``axes`` (the principal directions of an anisotropic lobe: a
+    lobe ``(n.h)^(nu cos^2 + nv sin^2)`` with ``nu = 0``, ``nv = 10^6`` is a band of
+    width ``~1/(t sqrt(nv))`` about an axis), and the azimuths ``phi_i +- pi/2``,
+    where ``tmax`` turns from ``~0`` to ``~pi/2`` within ``cot(theta_i)`` at grazing
+    incidence (and where a lobe round in ``wo`` is stretched in ``h``), graded
+    down to that width."""
+    ti, pi_ = _angles(wi)
+    lo, hi = pi_ - math.pi, pi_ + math.pi
+    s_pts = [np.linspace(0.0, 1.0, 8 * refine + 1), 0.5 ** np.arange(1, pole_levels + 1),
+             1.0 - 0.5 ** np.arange(1, HORIZON_LEVELS + 1)]
+    p_centres = [(pi_, levels // 2), (pi_ + math.pi, levels // 2)]
+    if axes:      # as deep as the pole: Ward alpha_x = 1e-4, alpha_y = 0.2 is a band 1e-4 / t wide
+        p_centres += [(k * 0.5 * math.pi, pole_levels) for k in range(4)]
+    for p in peaks:
+        p = np.asarray(p, dtype=np.float64)
+        h = wi + p / max(np.linalg.norm(p), 1e-300)
+        if p[2] <= 0 or np.linalg.norm(h) < 1e-12:
+            continue
+        th, ph = _angles(h)
+        if th > 1e-9:
+            s_pts.append(_grade(min(th / float(half_vector_tmax(wi, ph)), 1.0), 0.0, 1.0, levels))
+            p_centres.append((ph, levels))
+    p_pts = [np.linspace(lo, hi, 16 * refine + 1)]
+    perp = int(min(MAX_LEVELS, max(0, math.ceil(math.log2(8 * math.pi * max(math.sin(ti), 1e-300)
+                                                          / max(math.cos(ti), 1e-300))))))
+    p_centres += [(pi_ - 0.5 * math.pi, perp), (pi_ + 0.5 * math.pi, perp)]
+    for c, lv in p_centres:    # each centre and its images a period away (a centre on the seam grades both ends)
+        c = lo + (c - lo) % (2 * math.pi)
+        p_pts += [_grade(c + k * 2 * math.pi, lo, hi, lv) for k in (-1, 0, 1)]
+    return _merge(0.0, 1.0, s_pts), _merge(lo, hi, p_pts)

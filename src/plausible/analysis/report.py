@@ -33,6 +33,14 @@ class CheckReport:
     def passed(self) -> bool:
         return all(r.passed for r in self.results)
 
+    @property
+    def verdict(self) -> str:
+        """``PASS``, ``FAIL`` (some property fails) or ``UNRESOLVED`` (none fails, but
+        some could not be established: :attr:`PropertyResult.unresolved`)."""
+        if self.passed:
+            return "PASS"
+        return "FAIL" if any(not r.passed and not r.unresolved for r in self.results) else "UNRESOLVED"
+
     def __getitem__(self, name) -> PropertyResult:
         for r in self.results:
             if r.name == name:
@@ -40,8 +48,29 @@ class CheckReport:
         raise KeyError(name)
 
     def to_dict(self):
-        return jsonable(dict(model=self.model, params=self.params, passed=self.passed,
-                             results=[r.to_dict() for r in self.results], notes=self.notes))
+        """Plain data (JSON).  A check that was not applicable has ``passed`` and
+        ``figure`` null (not a pass, not a number); ``counts`` tallies passed,
+        failed and not applicable apart."""
+        results = []
+        for r in self.results:
+            d = r.to_dict()
+            if not applicable(r):
+                d.update(passed=None, figure=None)
+            results.append(d)
+        n_a = sum(not applicable(r) for r in self.results)
+        unresolved = sum(applicable(r) and r.unresolved for r in self.results)
+        failed = sum(applicable(r) and not r.passed and not r.unresolved for r in self.results)
+        counts = dict(passed=len(self.results) - n_a - failed - unresolved, failed=failed,
+                      unresolved=unresolved, not_applicable=n_a)
+        return jsonable(dict(model=self.model, params=self.params, passed=self.passed, verdict=self.verdict,
+                             counts=counts,
+                             results=results, notes=self.notes))
+
+    def _repr_html_(self) -> str:
+        from ..text import html_table
+
+        return html_table(f"check {self.model}: {self.verdict}",
+                          ["property", "figure", "bound", "verdict", "worst case"], self.rows())
 
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), **kw)
@@ -62,12 +91,13 @@ class CheckReport:
             worst = ", ".join(f"{k}={_short(v)}" for k, v in list(w.items())[:4])
             if r.worst.get("problems"):
                 worst = r.worst["problems"][0] + ("; " + worst if worst else "")
-            verdict = "N/A" if not applicable(r) else "PASS" if r.passed else "FAIL"
+            verdict = "N/A" if not applicable(r) else "PASS" if r.passed else \
+                "UNRESOLVED" if r.unresolved else "FAIL"
             out.append((r.name, f"{r.figure:.6g}", r.bound, verdict, worst))
         return out
 
     def __str__(self):
-        lines = [f"check {self.model} {self.params}: {'PASS' if self.passed else 'FAIL'}"]
+        lines = [f"check {self.model} {self.params}: {self.verdict}"]
         lines += ["  " + " | ".join(r) for r in self.rows()]
         lines += ["  note: " + n for n in self.notes]
         return "\n".join(lines)

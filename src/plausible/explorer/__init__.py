@@ -16,26 +16,55 @@ from .views import (albedo, build, export, half_diff_slice, lobe3d, model_catalo
                     verdict)
 
 
-def create_app():
-    """The FastAPI application (imported lazily: FastAPI is the ``explore`` extra)."""
+def create_app(host=None, port=None):
+    """The FastAPI application (imported lazily: FastAPI is the ``explore`` extra);
+    ``host``, ``port``: the address served (see :func:`plausible.explorer.app.create_app`)."""
     from .app import create_app as _create
 
-    return _create()
+    return _create(host, port)
 
 
-def serve(host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True) -> None:
+def bind(host: str = "127.0.0.1", port: int = 8765):
+    """A listening socket on ``host:port`` (as uvicorn binds it), or ValueError
+    saying the port is taken: bound *before* the URL is announced, so a busy
+    port is a clear message, not an announced URL followed by ``Errno 98``."""
+    import socket
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+        sock.listen(2048)
+    except OSError as e:
+        sock.close()
+        raise ValueError(f"cannot listen on {host}:{port}: {e.strerror} (another program, or another "
+                         f"plausible explore, may hold the port: choose another with --port)") from None
+    sock.set_inheritable(True)
+    return sock
+
+
+def url_of(host: str, port: int) -> str:
+    return f"http://{'localhost' if host in ('127.0.0.1', '::1') else host}:{port}/"
+
+
+def serve(host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True, sock=None) -> None:
     """Serve the explorer on ``host:port`` until interrupted (localhost by default),
-    opening the page in the default browser unless ``open_browser`` is False."""
+    opening the page in the default browser unless ``open_browser`` is False.
+    ``sock``: a socket from :func:`bind` (else one is bound here)."""
     import threading
     import webbrowser
 
     import uvicorn
 
-    url = f"http://{'localhost' if host in ('127.0.0.1', '::1') else host}:{port}/"
+    sock = sock if sock is not None else bind(host, port)
     if open_browser:
-        threading.Timer(1.0, lambda: webbrowser.open(url)).start()
-    uvicorn.run(create_app(), host=host, port=port, log_level="warning")
+        threading.Timer(1.0, lambda: webbrowser.open(url_of(host, port))).start()
+    from .app import server_config
+
+    server = uvicorn.Server(server_config(create_app(host, port), host, port))
+    server.run(sockets=[sock])
 
 
-__all__ = ["albedo", "build", "create_app", "export", "half_diff_slice", "lobe3d", "model_catalogue", "plane",
+__all__ = ["albedo", "bind", "build", "create_app", "export", "half_diff_slice", "lobe3d", "model_catalogue", "plane",
            "serve", "shader", "verdict"]

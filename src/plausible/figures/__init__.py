@@ -121,13 +121,42 @@ class Context:
             self.tick(self._total - self._done)
 
     # -- outputs ----------------------------------------------------------------
-    def image(self, name: str, img, exposure: float = 1.0, caption: str = "") -> np.ndarray:
-        """A render: ``name.exr`` (linear) and ``name.png`` (sRGB)."""
-        from .scenes import write_image
+    def image(self, name: str, img, exposure: float = 1.0, caption: str = "", rerender=None) -> np.ndarray:
+        """A render: ``name.exr`` (linear) and ``name.png`` (sRGB), and a check that it
+        has no isolated hot pixel (:func:`plausible.figures.scenes.hot_pixels`: luminance
+        above 4 x its 3x3 median + 0.5; a reference image has none).
+
+        ``rerender(y0, x0, h, w)``, if given, renders the window ``[y0, y0 + h) x [x0,
+        x0 + w)`` of the same scene with another seed: a hot pixel that stands out from
+        its 3x3 median there by at least half as much again is a feature of the image
+        (a glint smaller than a pixel), not noise, and is not counted (the note says
+        how many)."""
+        from .scenes import HOT_FACTOR, HOT_OFFSET, count_hot_pixels, hot_pixels, luminance, median3, write_image
 
         img = np.asarray(img, dtype=np.float64)
         write_image(self.out / name, img, exposure)
         self.items.append(dict(kind="image", png=f"{name}.png", exr=f"{name}.exr", caption=caption))
+        hot, iso = count_hot_pixels(img, isolated=False), hot_pixels(img)
+        steady = 0
+        if rerender is not None:
+            h, w = iso.shape
+            first = luminance(img) - median3(img)
+            for y, x in zip(*np.nonzero(iso)):
+                y0, x0 = max(0, min(y - 3, h - 7)), max(0, min(x - 3, w - 7))
+                crop = rerender(int(y0), int(x0), min(7, h), min(7, w))
+                excess = (luminance(crop) - median3(crop))[y - y0, x - x0]
+                steady += bool(excess >= 0.5 * first[y, x])   # a glint comes back; a firefly does not
+        n = int(iso.sum()) - steady
+        note = f"{hot} pixels pass the luminance test alone"
+        if hot > int(iso.sum()):
+            note += f", {hot - int(iso.sum())} of them with 2 or more neighbours as bright (the corners of a bright " \
+                    "area, not isolated)"
+        if steady:
+            note += f"; {steady} isolated one(s) as bright again (at least half the excess over the 3x3 median) in " \
+                    "a render of its neighbourhood with another seed: a glint smaller than a pixel, not noise; not " \
+                    "counted"
+        self.measure(f"{name}: isolated hot pixels (luminance > {HOT_FACTOR:g} x its 3x3 median + {HOT_OFFSET:g}, "
+                     "at most one neighbour as bright)", n, at_most=0, note=note)
         return img
 
     def plot(self, name: str, fig, caption: str = ""):
@@ -154,16 +183,36 @@ class Context:
         """Register a file the figure wrote itself into ``ctx.out``."""
         self.items.append(dict(kind="data", file=name, caption=caption))
 
-    def measure(self, quantity: str, measured, expected=None, tol=None, note: str = "", at_most=None):
-        """A number measured on the figure; with ``expected`` and ``tol`` it is a
-        check (``ok = |measured - expected| <= tol``); with ``at_most`` a bound
-        (``ok = measured <= at_most``)."""
+    def measure(self, quantity: str, measured, expected=None, tol=None, note: str = "", at_most=None,
+                at_least=None):
+        """A number measured on the figure.  It is a check when given
+
+        * ``expected`` and ``tol``: ``ok = |measured - expected| <= tol``;
+        * ``at_most`` and/or ``at_least``: ``ok = at_least <= measured <= at_most``;
+        * a boolean ``measured`` with a boolean ``expected``: ``ok = measured == expected``
+          (shown as yes / no).
+
+        Every value stored is a number (or a boolean); the report writes the bounds
+        as ``<= x`` / ``>= x`` in its "expected" column."""
+        if isinstance(measured, (bool, np.bool_)) or isinstance(expected, (bool, np.bool_)):
+            if not isinstance(expected, (bool, np.bool_, type(None))):
+                raise ValueError(f"measure({quantity!r}): a boolean is compared with a boolean, got {expected!r}")
+            m = dict(quantity=quantity, measured=bool(measured), expected=None if expected is None
+                     else bool(expected), tol=None, note=note)
+            if expected is not None:
+                m["ok"] = bool(measured) == bool(expected)
+            self.measurements.append(m)
+            return m
+        for k, v in (("expected", expected), ("tol", tol), ("at_most", at_most), ("at_least", at_least)):
+            if v is not None and not isinstance(v, (int, float, np.integer, np.floating)):
+                raise ValueError(f"measure({quantity!r}): '{k}' must be a number, got {v!r}")
         m = dict(quantity=quantity, measured=_num(measured), expected=_num(expected), tol=_num(tol), note=note)
         if expected is not None and tol is not None:
             m["ok"] = bool(abs(float(measured) - float(expected)) <= float(tol))
-        if at_most is not None:
-            m["expected"] = f"<= {float(at_most):.6g}"
-            m["ok"] = bool(float(measured) <= float(at_most))
+        if at_most is not None or at_least is not None:
+            m.update(at_most=_num(at_most), at_least=_num(at_least))
+            x = float(measured)
+            m["ok"] = bool((at_most is None or x <= float(at_most)) and (at_least is None or x >= float(at_least)))
         self.measurements.append(m)
         return m
 

@@ -51,7 +51,7 @@ def checks(ctx, variants):
     ctx.json("check", [r.to_dict() for r in reports], "every report")
     for m, r in zip(models, reports):
         rows = "; ".join(f"{x[0]} {x[3]} {x[1]}" for x in r.rows())
-        ctx.measure(f"{m.name} {r.params}: agrees with its claims", float(r.as_claimed(m.info)), 1.0, 0.0,
+        ctx.measure(f"{m.name} {r.params}: agrees with its claims", bool(r.as_claimed(m.info)), True,
                     note=rows)
 
 

@@ -4,6 +4,7 @@ incidence) for a few incidence angles, and its directional albedo curve."""
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -37,6 +38,27 @@ def lobe_values(model, theta_i_deg: float, view_deg):
     return f * np.cos(v)
 
 
+def polar_lobes(ax, view_deg, lobes: dict):
+    """Draw ``lobes`` (incidence in degrees -> values at signed viewing angles
+    ``view_deg``) on the polar axes ``ax``, each divided by its own peak (so a
+    grazing lobe ten times as high does not hide the others; the peak is in the
+    legend), the normal up and positive angles (the light's side) on the right:
+    the mirror direction, at ``-theta_i``, lies on the left.  Two radial ticks (0.5, 1)."""
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)
+    ax.set_thetamin(-90)
+    ax.set_thetamax(90)
+    for t, y in lobes.items():
+        y = np.asarray(y, dtype=np.float64)
+        peak = float(np.max(y)) if y.size else 0.0
+        ax.plot(np.radians(view_deg), y / peak if peak > 0 else y, label=f"theta_i = {t:g} (peak {peak:.3g})")
+    ax.set_rmax(1.05)
+    ax.set_rticks([0.5, 1.0])
+    ax.tick_params(axis="y", labelsize=7)
+    ax.set_rlabel_position(90)
+    ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(-0.15, -0.2))
+
+
 def _lobe_figure(ctx, model_name, incidence):
     import matplotlib
 
@@ -51,18 +73,15 @@ def _lobe_figure(ctx, model_name, incidence):
     a = np.asarray(alb.value)
     a = a.mean(axis=-1) if a.ndim > 1 else a
     view = np.linspace(-90, 90, 721)
-    fig = plt.figure(figsize=(10, 4.2))
+    fig = plt.figure(figsize=(10, 4.4))
     ax = fig.add_subplot(1, 2, 1, projection="polar")
     cols = {"view_deg": view}
+    lobes = {}
     for t in incidence:
-        y = lobe_values(m, t, view)
+        lobes[t] = y = lobe_values(m, t, view)
         cols[f"fcos @ theta_i={t:g}"] = y
-        ax.plot(np.radians(view), y, label=f"theta_i = {t:g}")
-    ax.set_theta_zero_location("N")
-    ax.set_thetamin(-90)
-    ax.set_thetamax(90)
-    ax.set_title(f"{model_name}: f cos(theta_o), plane of incidence", fontsize=9)
-    ax.legend(fontsize=7, loc="lower left")
+    polar_lobes(ax, view, lobes)
+    ax.set_title(f"{model_name}: f cos(theta_o) / its peak, plane of incidence", fontsize=9)
     ax2 = fig.add_subplot(1, 2, 2)
     ax2.plot(np.degrees(th), a)
     ax2.axhline(1.0, color="0.5", ls="--", lw=0.8)
@@ -70,10 +89,11 @@ def _lobe_figure(ctx, model_name, incidence):
     ax2.set_ylabel("directional albedo")
     ax2.set_xlim(0, 90)
     ax2.grid(alpha=.3)
-    ax2.set_title(f"{m!r}", fontsize=7)
+    ax2.set_title("\n".join(textwrap.wrap(repr(m), 70)), fontsize=7)
     fig.tight_layout()
-    ctx.plot("lobe", fig, caption="left: lobe for light at 0, 30, 60, 80 deg (light on the right, mirror on the "
-                                  "left); right: albedo against incidence")
+    ctx.plot("lobe", fig, caption="left: lobe for light at 0, 30, 60, 80 deg, each divided by its own peak "
+                                  "(the peak is in the legend), the light on the right of the normal, its "
+                                  "mirror direction on the left; right: albedo against incidence")
     ctx.table("lobe", cols)
     ctx.table("albedo", {"theta_deg": np.degrees(th), "albedo": a, "error": np.max(np.atleast_2d(
         np.asarray(alb.error).T), axis=0)})

@@ -27,12 +27,14 @@ QUICK_CHECK = (("pink-felt", "nickel"), ("ngan2005/ward-duer", "ngan2005/ashikhm
         "Ngan, Durand, Matusik 2005; Löw et al. 2012 (fits via bbm)",
         "Fitted parameters of measured materials are used as if they were plausible. Here every fit is "
         "checked: reciprocity (largest relative asymmetry) and the largest directional albedo over incidence "
-        "and RGB channel; a value above 1 gains energy. The complete table of every material is "
-        "docs/materials.md (scripts/materials_table.py).",
+        "and RGB channel (incidence 0 to 89.9 degrees and cos(theta) = 1e-5, 1e-9, the grazing angles of "
+        "plausible check --quick); a value above 1 gains energy. The complete table of every material is "
+        "docs/materials.md (scripts/materials_table.py, incidence to 89.9 degrees).",
         materials=CHECK_MATERIALS, fits="every loadable fit set (quick: 2 materials x 2 fits)")
 def materials_check(ctx, materials, fits):
     from plausible import library
-    from plausible.analysis.materials import TOL, check_fits, markdown
+    from plausible.analysis.checks import grazing_thetas
+    from plausible.analysis.materials import THETAS_DEG, TOL, check_fits, markdown
 
     if ctx.quick:
         names, keys = QUICK_CHECK
@@ -40,7 +42,8 @@ def materials_check(ctx, materials, fits):
         names, keys = materials, [f.key for f in library.fits() if f.built]
     keys = list(keys)
     ctx.steps(len(names) * len(keys))
-    rows = check_fits(keys, list(names), progress=ctx.tick)
+    # the grazing angles of `plausible check --quick`: cos(theta) = 1e-5 and 1e-9, where Ward 1992 diverges
+    rows = check_fits(keys, list(names), thetas_deg=THETAS_DEG + grazing_thetas((1e-5, 1e-9)), progress=ctx.tick)
     md = markdown(rows)
     (ctx.out / "materials-check.md").write_text(md)
     ctx.file("materials-check.md", "the table (summary, then one row per fit)")
@@ -53,7 +56,7 @@ def materials_check(ctx, materials, fits):
                     note="a sum of reciprocal terms is reciprocal")
         worst = max(rs, key=lambda r: r.max_albedo)
         ctx.measure(f"{key}: largest directional albedo", worst.max_albedo,
-                    note=f"{worst.material} at {worst.theta_deg:g} deg ({worst.channel}); "
+                    note=f"{worst.material} at {worst.theta_deg:.9g} deg ({worst.channel}); "
                          f"{sum(r.gains_energy for r in rs)} of {len(rs)} fits gain energy")
 
 
@@ -99,8 +102,9 @@ def _spheres(mi, bsdfs, cols, res_cell, spp):
     spacing = 2.3
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": 4},
          "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 0.3}},
-         "sun": {"type": "directional", "direction": [0.45, 0.35, -0.82],
-                 "irradiance": {"type": "rgb", "value": 2.5}},
+         # a distant light of irradiance 2.5 from (-0.45, -0.35, 0.82), as a spherical lamp 30 units away,
+         # above the orthographic camera (scenes.lamp: no sub-pixel highlight, no caustic fireflies)
+         "sun": S.lamp([-13.5, -10.5, 24.6], 2.5 * 30.0 ** 2, radius=5.0),
          "softbox": {"type": "rectangle",
                      # outside the orthographic view (|x| <= cols * spacing / 2): seen only in reflections
                      "to_world": mi.ScalarTransform4f().look_at(origin=[-8.0 - cols * spacing / 2, 12.0, 9.0],

@@ -41,6 +41,40 @@ def _patch_check(ctx, img, width, model, label, res):
     return got, se, a0
 
 
+#: Incidence angles (degrees) of the rim check, and plausible.albedo of nu = nv = 10 there
+#: (the prediction of the sphere's rim: 0.688 / 0.613 / 0.539 / 0.504).
+RIM_ANGLES = (30.0, 60.0, 80.0, 89.0)
+
+
+def tilted_plane_furnace(mi, bsdf: dict, theta_deg: float, res: int, spp: int):
+    """A large flat patch of ``bsdf`` in the unit furnace, seen by an orthographic
+    camera at ``theta_deg`` from its normal (one bounce): every pixel is the
+    directional albedo at that incidence, the radiance the sphere's rim shows at the
+    same angle (a silhouette pixel would mix angles and the background)."""
+    t = math.radians(theta_deg)
+    o = [5.0 * math.sin(t), 0.0, 5.0 * math.cos(t)]
+    return mi.load_dict({
+        "type": "scene", "integrator": {"type": "path", "max_depth": 2},
+        "sensor": S.orthographic(mi, 0.05, res, spp, origin=o, target=(0, 0, 0), up=(0, 1, 0)),
+        "plane": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([20.0, 20.0, 1.0]), "bsdf": bsdf},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+    })
+
+
+def rim_checks(ctx, mi, n, rs, rd):
+    """The furnace's prediction away from the sphere centre: the radiance at
+    incidence 30, 60, 80, 89 deg (the rim) against plausible.albedo there, 4 s.e."""
+    model = plausible.make("ashikhmin-shirley", nu=n, nv=n, rs=rs, rd=rd)
+    for i, t in enumerate(RIM_ANGLES):
+        img = S.render(mi, tilted_plane_furnace(mi, as_bsdf(n, n, rs, rd), t, 16, ctx.spp(2)), seed=100 + i)
+        px = img.mean(axis=-1).ravel()
+        got, se = float(px.mean()), float(px.std(ddof=1) / math.sqrt(px.size))
+        want = float(albedo(model, direction(math.radians(t))))
+        ctx.measure(f"nu = nv = {n:g}, incidence {t:g} deg (the rim): furnace radiance vs plausible.albedo", got,
+                    want, 4 * se, note=f"a flat patch seen at {t:g} deg in the furnace, {px.size} pixels, 4 s.e.")
+        ctx.tick()
+
+
 @figure("as-furnace", "Spheres in a white furnace", f"{TR}, fig. 2",
         "Spheres in a furnace. As the exponents get larger, less energy is \u201clost\u201d. For the center of the "
         "darkest sphere, n_u = n_v = 10, the luminance is about 68% of the background luminance.",
@@ -48,7 +82,7 @@ def _patch_check(ctx, img, width, model, label, res):
 def furnace(ctx, exponents, rs, rd):
     mi = S.mitsuba()
     res, spp, width = ctx.res(0.375, minimum=24), ctx.spp(), 1.05
-    ctx.steps(len(exponents) ** 2)
+    ctx.steps(len(exponents) ** 2 + len(RIM_ANGLES))
     imgs, labels, rows = [], [], []
     for k, (nu, nv) in enumerate((a, b) for a in exponents for b in exponents):
         # one seed per sphere: independent noise
@@ -67,6 +101,7 @@ def furnace(ctx, exponents, rs, rd):
     rows = np.array(rows)
     ctx.table("centres", dict(nu=rows[:, 0], nv=rows[:, 1], centre=rows[:, 2], centre_se=rows[:, 3],
                               albedo_normal=rows[:, 4]))
+    rim_checks(ctx, mi, exponents[0], rs, rd)
     ctx.measure("nu = nv = 10: directional albedo at normal incidence vs the paper's 'about 68%'", rows[0, 4],
                 0.68, 0.02, note=f"plausible.albedo; the render's centre reads {rows[0, 2]:.3f} +- {rows[0, 3]:.3f}; "
                 "'about' read as +-2 points")
@@ -111,7 +146,7 @@ def cylinder(ctx, nu, nv, rs, rd):
     shapes = {"cyl": {"type": "cylinder", "radius": 1.0, "p0": [0, 0, -1.0], "p1": [0, 0, 2.0], "bsdf": b},
               "cap": {"type": "disk", "to_world": T.translate([0, 0, 2.0]), "bsdf": b}}
     lights = S.studio_lights(sky=0.15)
-    lights["key"] = {"type": "point", "position": [3.0, -5.0, 1.5], "intensity": S.rgb(60.0)}
+    lights["key"] = S.lamp([9.0, -15.0, 4.5], 540.0, radius=3.0)   # a point light of 60 at a third the distance
     res = ctx.res(1.5)
     ctx.steps(1)
     sensor = S.perspective(mi, [0, -9, 3.0], [0, 0, 0.4], res, ctx.spp(), fov=34.0, up=[0, 0, 1])
@@ -159,8 +194,9 @@ def lambert_vs_as(ctx, nu, nv, rs, rd):
                       "bsdf": {"type": "lambertian", "rd": S.rgb(rd)}},
               "as": {"type": "sphere", "center": [1.15, 0, 0], "radius": 1.0, "bsdf": as_bsdf(nu, nv, rs, rd)}}
     lights = {"sky": {"type": "constant", "radiance": S.rgb(0.05)},
-              "back": {"type": "point", "position": [2.0, 6.0, 3.0], "intensity": S.rgb(55.0)},
-              "front": {"type": "point", "position": [-3.0, -6.0, 2.0], "intensity": S.rgb(20.0)}}
+              # point lights of 55 and 20 at a third the distance, as spherical lamps (scenes.lamp)
+              "back": S.lamp([6.0, 18.0, 9.0], 495.0, radius=3.0),
+              "front": S.lamp([-9.0, -18.0, 6.0], 180.0, radius=3.0)}
     res = ctx.res(1.5)
     ctx.steps(1)
     sensor = S.perspective(mi, [0, -8, 1.0], [0, 0, 0], res, ctx.spp(), fov=32.0, up=[0, 0, 1])

@@ -104,6 +104,13 @@ def _index_all(out: Path, results: dict) -> Path:
     return write_index(out, allm)
 
 
+def _dir_mode() -> int:
+    """The mode ``mkdir`` gives a new folder under the current umask (0755 under 022)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o777 & ~mask
+
+
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
         progress=None) -> dict:
     """Make the figures (all, or the names in ``only``) into ``out`` and write
@@ -137,11 +144,12 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
                 continue
             _remove_partial(out, name)      # left by a run that was killed
             tmp = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out))
+            os.chmod(tmp, _dir_mode())      # mkdtemp makes 0700: the figure folder follows the umask
             ctx = Context(tmp, resolution=resolution, spp=spp, quick=quick,
                           progress=lambda total, label="", _n=name: start(progress, total, _n))
             t0 = time.time()
             m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
-                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick)
+                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders)
             try:
                 fig.fn(ctx, **fig.params)
                 m["status"] = "ok"
@@ -201,8 +209,20 @@ _JS = """<script>
 
 
 def _cell(x):
-    """A measurement's number (or text) in a table cell."""
+    """A measurement's number (a boolean as yes / no) in a table cell."""
+    if isinstance(x, bool):
+        return "yes" if x else "no"
     return "" if x is None else html.escape(fmt(x, ".6g"))
+
+
+def _expected(x) -> str:
+    """The "expected" cell: the value, or the bounds ``>= a`` / ``<= b``."""
+    bounds = [f"&ge; {_cell(x['at_least'])}" if x.get("at_least") is not None else "",
+              f"&le; {_cell(x['at_most'])}" if x.get("at_most") is not None else ""]
+    bounds = [b for b in bounds if b]
+    if bounds:
+        return ", ".join(bounds)
+    return _cell(x.get("expected"))
 
 
 def write_index(out: Path, figs: dict) -> Path:
@@ -222,7 +242,8 @@ def write_index(out: Path, figs: dict) -> Path:
         parts.append(f"<h2 id='{e(n)}'>{e(m.get('title', n))}</h2>")
         parts.append(f"<p><b>{e(m.get('source', ''))}</b></p><blockquote>{e(m.get('caption', ''))}</blockquote>")
         params = dict(m.get("params", {}))
-        params.update(resolution=m.get("resolution"), spp=m.get("spp"))
+        if m.get("renders", True):   # image size and samples only where the section renders
+            params.update(resolution=m.get("resolution"), spp=m.get("spp"))
         parts.append("<p>Parameters: " + ", ".join(f"<code>{e(k)} = {e(str(v))}</code>" for k, v in params.items())
                      + f" &middot; made in {m.get('seconds', '?')} s</p>")
         if m.get("status") != "ok":
@@ -247,7 +268,7 @@ def write_index(out: Path, figs: dict) -> Path:
                 cls = "" if ok is None else ("ok" if ok else "bad")
                 verdict = "" if ok is None else ("holds" if ok else "DOES NOT HOLD")
                 parts.append(f"<tr><td>{e(x['quantity'])}</td><td>{_cell(x['measured'])}</td>"
-                             f"<td>{_cell(x['expected'])}</td><td>{_cell(x['tol'])}</td>"
+                             f"<td>{_expected(x)}</td><td>{_cell(x['tol'])}</td>"
                              f"<td class='{cls}'>{verdict}</td><td>{e(x.get('note', ''))}</td></tr>")
             parts.append("</table>")
         for t in m.get("notes", []):

@@ -34,13 +34,16 @@ and Python that computed the row.
 from __future__ import annotations
 
 import csv
+import fcntl
+import hashlib
 import io
 import json
 import math
 import os
 import platform
+import socket
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -111,18 +114,22 @@ def append_row(path, header, row: dict) -> None:
     w = csv.writer(buf, lineterminator="\n")
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
+        fcntl.flock(fd, fcntl.LOCK_EX)      # another run appending to the same table waits
         if os.fstat(fd).st_size == 0:
             w.writerow(header)
         w.writerow([_cell(row.get(c)) for c in header])
         os.write(fd, buf.getvalue().encode())
         os.fsync(fd)
     finally:
-        os.close(fd)
+        os.close(fd)                        # (releases the lock)
 
 
 def _cell(v) -> str:
+    """One cell's text, never with a line break (one row is one line of the file)."""
     if v is None:
         return ""
+    if isinstance(v, str):
+        return " | ".join(v.splitlines()) if ("\n" in v or "\r" in v) else v
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (list, tuple, np.ndarray)):
@@ -145,31 +152,79 @@ def _parse(v: str):
         return v
 
 
-def load_results(out) -> list[dict]:
+def _read_table(path, problems: list):
+    """The rows of one ``fits/<model>.csv`` as dicts over its columns, skipping
+    (and listing in ``problems`` as ``file:line: reason``) every line that is not
+    a whole row: a garbage line, extra or missing fields, an unterminated quote,
+    a status other than ok/failed, a cell that does not parse.  A header that is
+    not the model's columns is reported and the rows are read by the columns
+    (the model is the file's name).  One row is one line (:func:`append_row`
+    writes no newline inside a cell)."""
+    model = path.stem
+    try:
+        header = list(columns(model))
+    except ValueError:
+        problems.append(f"{path}: not a results table of a registered model (file name {path.name!r}); skipped")
+        return []
+    with open(path, "rb") as fh:
+        data = fh.read()
+    lines = data.decode("utf-8", errors="replace").split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    elif lines:
+        lines.pop()                     # a last row cut short by a crash (no newline)
+    out = []
+    for ln, line in enumerate(lines, 1):
+        where = f"{path}:{ln}"
+        try:
+            cells = next(csv.reader([line], strict=True))
+        except (csv.Error, StopIteration) as e:
+            problems.append(f"{where}: not a CSV row ({e}); skipped")
+            continue
+        if ln == 1 and cells and cells[0] == "target":
+            if cells != header:
+                problems.append(f"{where}: header is not the columns of {model!r}; rows read by those columns")
+            continue
+        if len(cells) != len(header):
+            problems.append(f"{where}: {len(cells)} fields where {model!r} has {len(header)}; skipped")
+            continue
+        r = dict(zip(header, cells))
+        if r["status"] not in ("ok", "failed") or r["model"] != model or not r["target"] or not r["metric"]:
+            problems.append(f"{where}: not a fit of {model!r} (status {r['status'][:20]!r}); skipped")
+            continue
+        try:
+            parsed = {k: (v if k in HEAD or k.endswith("_version") or k == "error" else _parse(v))
+                      for k, v in r.items()}
+        except ValueError as e:
+            problems.append(f"{where}: a cell does not parse ({e}); skipped")
+            continue
+        out.append(parsed)
+    return out
+
+
+def load_results(out, problems: list | None = None) -> list[dict]:
     """Every row of ``OUT/fits/*.csv`` as a dict: parameters under ``"params"``,
     error figures under ``"errors"``, the other columns as they are (numbers as
     floats, colours as lists, empty cells as ``None``).  A row cut short by a
-    crash is skipped."""
+    crash, and every malformed row, is skipped; each malformed one is appended
+    to ``problems`` (if given) as ``file:line: reason``, and the good rows are
+    kept (so a batch resumes and refits only what was lost)."""
     rows = []
+    problems = [] if problems is None else problems
+    fixed = set(HEAD) | set(TAIL)
     for path in sorted((Path(out) / "fits").glob("*.csv")):
-        with open(path, newline="") as fh:
-            text = fh.read()
-        if text and not text.endswith("\n"):
-            text = text[: text.rfind("\n") + 1]
-        reader = csv.DictReader(io.StringIO(text))
-        fixed = set(HEAD) | set(TAIL)
-        for r in reader:
-            row = {k: (r[k] if k in HEAD or k.endswith("_version") or k == "error" else _parse(r[k]))
-                   for k in r if k in fixed}
-            row["params"] = {k: _parse(v) for k, v in r.items() if k not in fixed}
-            row["errors"] = {k: _parse(r.get(f"err_{k}", "")) for k in ERROR_KEYS}
+        for r in _read_table(path, problems):
+            row = {k: v for k, v in r.items() if k in fixed}
+            row["params"] = {k: v for k, v in r.items() if k not in fixed}
+            row["errors"] = {k: r.get(f"err_{k}") for k in ERROR_KEYS}
             rows.append(row)
     return rows
 
 
-def done_keys(out, retry_failed: bool = False) -> set:
-    """Keys of the fits already in ``out`` (failed ones too, unless ``retry_failed``)."""
-    return {(r["target"], r["model"], r["metric"]) for r in load_results(out)
+def done_keys(out, retry_failed: bool = False, problems: list | None = None) -> set:
+    """Keys of the fits already in ``out`` (failed ones too, unless ``retry_failed``);
+    malformed rows go to ``problems`` (:func:`load_results`)."""
+    return {(r["target"], r["model"], r["metric"]) for r in load_results(out, problems)
             if r["status"] == "ok" or not retry_failed}
 
 
@@ -213,10 +268,71 @@ def record(out, row: dict) -> None:
     append_row(table_path(out, row["model"]), columns(row["model"]), row)
 
 
+# -- sharing a folder between runs --------------------------------------------------------
+
+def _claim_path(out, task: FitTask) -> Path:
+    digest = hashlib.sha1(json.dumps(list(task.key)).encode()).hexdigest()[:20]
+    return Path(out) / "fits" / ".claims" / f"{task.model}-{digest}"
+
+
+def _stale(path: Path) -> bool:
+    """A claim left by a run that is gone (same machine, process not alive)."""
+    try:
+        who = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False                   # being written, or unreadable: not ours to judge
+    if who.get("host") != socket.gethostname():
+        return False
+    try:
+        os.kill(int(who.get("pid", -1)), 0)
+    except ProcessLookupError:
+        return True
+    except (PermissionError, ValueError, OverflowError):
+        return False
+    return False
+
+
+def claim(out, task: FitTask) -> bool:
+    """Claim ``task`` for this process, atomically (a file created with ``O_EXCL``
+    in ``OUT/fits/.claims``); False when another live run holds it.  A claim left
+    by a run that died on this machine is taken over."""
+    path = _claim_path(out, task)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for _ in range(2):
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            if _stale(path):
+                path.unlink(missing_ok=True)
+                continue
+            return False
+        try:
+            os.write(fd, json.dumps(dict(host=socket.gethostname(), pid=os.getpid(), key=list(task.key),
+                                         time=time.time())).encode())
+        finally:
+            os.close(fd)
+        return True
+    return False
+
+
+def release(out, task: FitTask) -> None:
+    """Give up the claim of ``task`` (after its row is written)."""
+    _claim_path(out, task).unlink(missing_ok=True)
+
+
+def _in_table(out, task: FitTask, retry_failed: bool) -> bool:
+    """Is ``task`` already in its model's table (written by another run meanwhile)?"""
+    path = table_path(out, task.model)
+    if not path.exists():
+        return False
+    return any((r["target"], r["model"], r["metric"]) == task.key and (r["status"] == "ok" or not retry_failed)
+               for r in _read_table(path, []))
+
+
 # -- the batch --------------------------------------------------------------------------
 
 def plan(targets, models, metrics, *, out=None, seed: int = 0, starts: int = 4,
-         time_limit: float | None = None, retry_failed: bool = False) -> list[FitTask]:
+         time_limit: float | None = None, retry_failed: bool = False, problems: list | None = None) -> list[FitTask]:
     """Every ``(target, model, metric)`` task, minus those already in ``out``.
 
     ``models`` and ``metrics`` are checked here (unknown names raise
@@ -237,7 +353,7 @@ def plan(targets, models, metrics, *, out=None, seed: int = 0, starts: int = 4,
             raise ValueError(f"fit_batch: metric must be one of {', '.join(METRICS)}, got {m!r}")
     if starts < 1:
         raise ValueError(f"fit_batch: starts must be >= 1, got {starts}")
-    skip = done_keys(out, retry_failed) if out is not None else set()
+    skip = done_keys(out, retry_failed, problems) if out is not None else set()
     tasks = [FitTask(t, m, k, seed, starts, time_limit)
              for t in dict.fromkeys(targets) for m in dict.fromkeys(models) for k in dict.fromkeys(metrics)]
     return [t for t in tasks if t.key not in skip]
@@ -256,6 +372,10 @@ class BatchSummary:
     workers: int
     dashboard: str | None = None
     interrupted: bool = False
+    #: Fits another run on the same folder was running or had written (left to it).
+    shared: int = 0
+    #: Malformed rows of the folder's tables (``file:line: reason``), skipped and refitted.
+    bad_rows: list = field(default_factory=list)
 
 
 def _client(scheduler, workers):
@@ -288,17 +408,47 @@ def fit_batch(targets, models, metrics, out, *, scheduler: str | None = None, wo
     re-raised after the cluster is closed.
     """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    for p in (out / "fits").glob("*.csv"):
-        repair(p)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for p in (out / "fits").glob("*.csv"):
+            repair(p)
+    except OSError as e:
+        raise BatchWriteError(f"fit_batch: cannot write into the results folder {str(out)!r} "
+                              f"({e.strerror or e}); nothing was run") from None
     all_tasks = plan(targets, models, metrics, seed=seed, starts=starts, time_limit=time_limit)
+    bad = []
     tasks = plan(targets, models, metrics, out=out, seed=seed, starts=starts, time_limit=time_limit,
-                 retry_failed=retry_failed)
-    summary = BatchSummary(len(all_tasks), len(all_tasks) - len(tasks), 0, 0, 0.0, 0)
+                 retry_failed=retry_failed, problems=bad)
+    summary = BatchSummary(len(all_tasks), len(all_tasks) - len(tasks), 0, 0, 0.0, 0, bad_rows=bad)
     t0 = time.monotonic()
+    held = set()
 
-    def finish(row, tick):
-        record(out, row)
+    def take(task):
+        """Claim ``task``, unless another run holds it or has written it meanwhile."""
+        if not claim(out, task):
+            summary.shared += 1
+            tick()
+            return False
+        held.add(task)
+        if _in_table(out, task, retry_failed):
+            release(out, task)
+            held.discard(task)
+            summary.shared += 1
+            tick()
+            return False
+        return True
+
+    def finish(row):
+        task = FitTask(row["target"], row["model"], row["metric"], row["seed"], row["starts"], row["time_limit"])
+        try:
+            record(out, row)
+        except OSError as e:
+            raise BatchWriteError(
+                f"fit_batch: cannot write {str(table_path(out, row['model']))!r} ({e.strerror or e}): "
+                f"{summary.done} fits of this run are stored, none was lost in the table; free space or "
+                f"fix the folder's permissions and run the same command again to resume") from None
+        release(out, task)
+        held.discard(task)
         summary.done += 1
         summary.failed += row["status"] != "ok"
         if on_result:
@@ -306,27 +456,56 @@ def fit_batch(targets, models, metrics, out, *, scheduler: str | None = None, wo
         tick()
 
     tick = start(progress, len(tasks), "fits")
-    if tasks and workers == 0 and not scheduler:
-        summary.workers = 1
-        for t in tasks:
-            finish(run_task(t), tick)
-    elif tasks:
-        _run_dask(tasks, scheduler, workers, summary, lambda row: finish(row, tick))
+    try:
+        if tasks and workers == 0 and not scheduler:
+            summary.workers = 1
+            for t in tasks:
+                if take(t):
+                    finish(run_task(t))
+        elif tasks:
+            _run_dask(tasks, scheduler, workers, summary, finish, take)
+    finally:
+        for t in list(held):        # claims of fits not finished (interrupted, failed to write)
+            release(out, t)
     summary.seconds = time.monotonic() - t0
     return summary
 
 
-def _run_dask(tasks, scheduler, workers, summary, finish):
+class BatchWriteError(ValueError):
+    """The results folder cannot be written (read-only, disk full): the message says
+    what is stored and how to resume."""
+
+
+def _run_dask(tasks, scheduler, workers, summary, finish, take):
+    """Run ``tasks`` on Dask, claiming each (``take``) just before it is submitted and
+    keeping about two per worker in flight, so that runs sharing a folder share
+    the work."""
     from distributed import as_completed
 
     client, cluster = _client(scheduler, workers)
     try:
         summary.workers = len(client.scheduler_info().get("workers", {}))
         summary.dashboard = client.dashboard_link if scheduler else None
-        futures = client.map(run_task, tasks, pure=False, key=[f"fit-{i}" for i in range(len(tasks))])
+        queue = iter(tasks)
+        done = as_completed()
+        futures = []
+
+        def submit_next():
+            for t in queue:
+                if take(t):
+                    fut = client.submit(run_task, t, pure=False, key=f"fit-{os.getpid()}-{len(futures)}")
+                    futures.append(fut)
+                    done.add(fut)
+                    return True
+            return False
+
+        for _ in range(max(2 * summary.workers, 2)):
+            if not submit_next():
+                break
         try:
-            for fut in as_completed(futures):
+            for fut in done:
                 finish(fut.result())
+                submit_next()
         except KeyboardInterrupt:
             summary.interrupted = True
             client.cancel(futures)
@@ -346,5 +525,5 @@ def scaling(per_fit_seconds: float, fits: int, workers: int, overhead: float = 0
     return math.ceil(fits / workers) * per_fit_seconds + overhead
 
 
-__all__ = ["BatchSummary", "FitTask", "append_row", "columns", "done_keys", "fit_batch", "load_results",
-           "plan", "record", "repair", "run_task", "scaling", "table_path"]
+__all__ = ["BatchSummary", "BatchWriteError", "FitTask", "append_row", "claim", "columns", "done_keys", "fit_batch",
+           "load_results", "plan", "record", "release", "repair", "run_task", "scaling", "table_path"]

@@ -25,7 +25,15 @@ specifications with their ranges); the albedo comes from
 4. **Colours**, for a multi-channel target: all parameters are first fitted to
    the channel mean with colours as scalars, then the colour parameters alone
    are refitted per channel with the others fixed.
-5. **Albedo** inside the optimiser: a fixed graded Gauss-Legendre rule per
+5. **Identifiability**: at the solution, the Jacobian of ``ln(f cos + eps)``
+   on the sample pairs with respect to the free variables (central
+   differences; columns scaled to unit length) is decomposed; a singular
+   value below ``1e-6`` of the largest is a flat direction of every
+   metric -- a parameter, or a combination (Ward's ``rs / alpha_y`` when no
+   half vector leaves the ``x`` axis), that the samples do not constrain.  The
+   parameters along it are listed in ``FitResult.unconstrained`` and a
+   :class:`UnconstrainedWarning` names them.
+6. **Albedo** inside the optimiser: a fixed graded Gauss-Legendre rule per
    incidence angle (:func:`plausible.analysis.quadrature.hemisphere_grid`,
    ``m = 4``, ``levels = 8``; measured against the accurate integrator: 5e-7
    relative for an exponent of 30, 2e-4 for Cook-Torrance ``m = 0.2``, 6e-3 for
@@ -37,6 +45,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -86,7 +95,7 @@ def load_table(path):
     """
     rows, width, header = [], None, False
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:     # (a byte-order mark is not part of the first row)
             for ln, line in enumerate(fh, 1):
                 s = line.split("#", 1)[0].strip()
                 if not s:
@@ -118,6 +127,8 @@ def load_table(path):
 
 
 _COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
+#: Largest BRDF value a table may hold: its square (the least-squares metrics) stays finite.
+F_MAX = 1e150
 
 
 def _check_row(where, row):
@@ -132,6 +143,9 @@ def _check_row(where, row):
     for name, v in zip(names[6:], row[6:]):
         if v < 0:
             raise ValueError(f"{where}: column {name} (the BRDF value) must be >= 0, got {v:g}")
+        if v > F_MAX:
+            raise ValueError(f"{where}: column {name} (the BRDF value) must lie in [0, {F_MAX:g}] "
+                             f"(the metrics square it), got {v:g}")
 
 
 def _clip(text, n=60):
@@ -159,8 +173,16 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
     """
     if isinstance(target, Target):
         return target
+    if isinstance(target, str) and target.strip().startswith("material:"):   # a published fit
+        return as_target(registry.make_from_spec(target.strip()), thetas_deg=thetas_deg)
     if isinstance(target, (str, Path)):
         p = Path(target)
+        if p.is_dir():     # a folder is never a target; a name that is also a model spec is the model
+            try:
+                return as_target(registry.make_from_spec(str(target)), thetas_deg=thetas_deg)
+            except ValueError:
+                raise ValueError(f"target {str(target)!r} is a folder; a target is a model spec (name:k=v), "
+                                 f"material:NAME@FIT, a MERL .binary file or a CSV table") from None
         if not p.exists() and (p.suffix.lower() in (".csv", ".binary", ".txt") or "/" in str(target)):
             raise ValueError(f"target file {str(target)!r} not found")
         if p.exists():
@@ -294,6 +316,9 @@ class FitResult:
     timed_out: bool = False
     seconds: float = 0.0
     fit_albedo: np.ndarray | None = None
+    #: Groups of parameters along a flat direction of the objective at the
+    #: solution (step 5 of :mod:`plausible.fitting.fit`): values the target does not decide.
+    unconstrained: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         """Plain data (JSON): model, metric, parameters, errors, target label."""
@@ -301,7 +326,16 @@ class FitResult:
             return v.tolist() if isinstance(v, np.ndarray) else v
         return {"model": self.model.name, "metric": self.metric, "target": self.target.label,
                 "params": {k: conv(v) for k, v in self.params.items()}, "errors": dict(self.errors),
-                "evaluations": self.evaluations, "timed_out": self.timed_out, "seconds": self.seconds}
+                "evaluations": self.evaluations, "timed_out": self.timed_out, "seconds": self.seconds,
+                "unconstrained": [list(g) for g in self.unconstrained]}
+
+    def _repr_html_(self) -> str:
+        from ..text import html_table
+
+        rows = [(k, fmt(v, ".5g")) for k, v in self.params.items()]
+        rows += [(f"error: {k}", "n/a" if v is None else f"{v:.4g}") for k, v in self.errors.items()]
+        rows += [("unconstrained", "; ".join(", ".join(g) for g in self.unconstrained))] if self.unconstrained else []
+        return html_table(f"{self.model.name} fitted to {self.target.label} ({self.metric})", ["", "value"], rows)
 
     def summary(self) -> str:
         ps = ", ".join(f"{k}={fmt(v, '.5g', sep=',')}" for k, v in self.params.items())
@@ -361,12 +395,89 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
         params, more = _fit_channels(problem, colour_vars, params, base, tick)
         objectives += more
     params.update({k: v for k, v in base.items() if isinstance(v, np.ndarray) and k in fixed})
-    # 5. every metric's figure, albedo by the accurate integrator
+    # 5. parameters the samples do not constrain
+    flat = unconstrained(problem, vars_, {k: float(np.mean(v)) if isinstance(v, np.ndarray) else v
+                                          for k, v in params.items()})
+    if flat:
+        warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(_flat_text(g) for g in flat)
+                      + " (the samples do not decide them; fix one with fixed={...} or add samples that do)",
+                      UnconstrainedWarning, stacklevel=2)
+    # 6. every metric's figure, albedo by the accurate integrator
     model = info.cls(**params)
     out = evaluate_fit(model, tgt, problem.eps, combine)
     return FitResult(model, {k: model.params[k] for k in model.params}, metric, out["errors"], tgt,
                      sum(o.evaluations for o in objectives), any(o.timed_out for o in objectives),
-                     time.monotonic() - t0, out["albedo"])
+                     time.monotonic() - t0, out["albedo"], flat)
+
+
+class UnconstrainedWarning(UserWarning):
+    """A fit left a parameter (or a combination of parameters) unconstrained."""
+
+
+def _flat_text(group) -> str:
+    if len(group) == 1:
+        return f"parameter {group[0]!r} is unconstrained (the objective is flat along it)"
+    return (f"parameters {', '.join(map(repr, group))} trade against each other along a flat direction "
+            f"of the objective")
+
+
+#: Step of the Jacobian's central differences (a fraction of each variable's range,
+#: in the variables of step 2) and the singular-value ratio below which a direction
+#: counts as flat.
+JAC_STEP, FLAT_RATIO = 1e-4, 1e-6
+
+
+def unconstrained(problem, vars_, params) -> list:
+    """Step 5: groups of the free variables ``vars_`` along which ``ln(f cos +
+    eps)`` on the target's pairs does not change at ``params`` (channel means),
+    one group per flat direction: the parameters whose share of that singular
+    vector (of the Jacobian with unit columns) is above 0.3.  ``[]`` when every
+    direction is constrained."""
+    if not vars_:
+        return []
+    tgt = problem.tgt
+    obj = _Objective(problem, vars_, params, None)
+    x0 = np.array([v.fwd(params[v.name]) for v in vars_])
+
+    def out(x):
+        try:
+            m = obj.model_at(x)
+        except ValueError:
+            return None
+        return np.log(_reduce(m.eval(tgt.wi, tgt.wo), tgt.wo, None) + problem.eps)
+
+    f0 = out(x0)
+    if f0 is None:
+        return []
+    cols = []
+    for j, v in enumerate(vars_):
+        span = v.bounds[1] - v.bounds[0]
+        h = JAC_STEP * span
+        xp, xm = x0.copy(), x0.copy()
+        xp[j] = min(x0[j] + h, v.bounds[1])
+        xm[j] = max(x0[j] - h, v.bounds[0])
+        fp, fm = out(xp), out(xm)
+        if fp is None:
+            fp, xp = f0, x0
+        if fm is None:
+            fm, xm = f0, x0
+        dx = (xp[j] - xm[j]) / span
+        cols.append((fp - fm) / dx if dx > 0 else np.zeros_like(f0))
+    J = np.column_stack(cols)
+    norms = np.linalg.norm(J, axis=0)
+    top = float(norms.max())
+    if top == 0.0:
+        return [[v.name for v in vars_]]
+    # a column far below the others: that parameter alone; the rest equilibrated
+    # (unit columns), so a flat combination shows as a small singular value
+    # whatever the parameters' units, with the parameters' shares comparable
+    groups = [[v.name] for v, n in zip(vars_, norms) if n <= FLAT_RATIO * top]
+    keep = [j for j, n in enumerate(norms) if n > FLAT_RATIO * top]
+    _, S, Vt = np.linalg.svd(J[:, keep] / norms[keep], full_matrices=False)
+    for s_k, vec in zip(S, Vt):
+        if s_k <= FLAT_RATIO * S[0]:
+            groups.append([vars_[j].name for j, c in zip(keep, vec) if abs(c) > 0.3])
+    return [g for g in groups if g]
 
 
 @dataclass

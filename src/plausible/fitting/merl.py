@@ -91,18 +91,32 @@ def cell_centres():
     return from_half_diff(*np.meshgrid(th, td, pd, indexing="ij"))
 
 
-def from_half_diff(theta_h, theta_d, phi_d):
+def from_half_diff(theta_h, theta_d, phi_d, phi_h=0.0):
     """Direction pairs ``(wi, wo)`` (arrays ``(..., 3)``) with Rusinkiewicz
-    coordinates ``theta_h, theta_d, phi_d`` and ``phi_h = 0``: the inverse of
-    :func:`half_diff` (``wi`` is the difference vector rotated by ``theta_h``
-    about ``y``; ``wo`` its mirror image about the half vector)."""
-    TH, TD, PD = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_h, theta_d, phi_d)))
+    coordinates ``theta_h, theta_d, phi_d`` and half-vector azimuth ``phi_h``
+    (radians): the inverse of :func:`half_diff` (``wi`` is the difference vector
+    rotated by ``theta_h`` about ``y``, then by ``phi_h`` about the normal;
+    ``wo`` its mirror image about the half vector).  An isotropic table (MERL)
+    does not depend on ``phi_h``; an anisotropic model does."""
+    TH, TD, PD, PH = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64)
+                                           for a in (theta_h, theta_d, phi_d, phi_h)))
     dx, dy, dz = np.sin(TD) * np.cos(PD), np.sin(TD) * np.sin(PD), np.cos(TD)
     ch, sh = np.cos(TH), np.sin(TH)
     wi = np.stack([dx * ch + dz * sh, dy, dz * ch - dx * sh], axis=-1)
     h = np.stack([sh, np.zeros_like(sh), ch], axis=-1)
     wo = 2.0 * np.sum(wi * h, axis=-1, keepdims=True) * h - wi
-    return wi, wo
+    cp, sp = np.cos(PH), np.sin(PH)
+
+    def rot(w):          # by phi_h about the normal
+        return np.stack([w[..., 0] * cp - w[..., 1] * sp, w[..., 0] * sp + w[..., 1] * cp, w[..., 2]], axis=-1)
+
+    return rot(wi), rot(wo)
+
+
+#: The golden angle (radians): the half-vector azimuth of the ``k``-th measured
+#: pair is ``k`` times it (mod 2 pi), so the azimuths of any run of cells spread
+#: evenly over the circle (a Fibonacci-lattice spiral).
+GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
 
 
 class MerlBRDF(BxDF):
@@ -163,11 +177,18 @@ class MerlBRDF(BxDF):
 
     def measured_pairs(self, wi, wo):
         """The direction pairs at the centres of the cells that the pairs ``wi``,
-        ``wo`` fall in, each cell once (in order of first occurrence), with
-        ``phi_h = 0``: where the table was measured.  A fit compares a model with
-        the table there, not at arbitrary pairs, a sixth of which (those of
+        ``wo`` fall in, each cell once (in order of first occurrence): where the
+        table was measured.  A fit compares a model with the table there, not at
+        arbitrary pairs, a sixth of which (those of
         :func:`plausible.fitting.metrics.sample_pairs`, at whole degrees) lie on
-        cell edges, where the nearest-cell value is decided by the last bit."""
+        cell edges, where the nearest-cell value is decided by the last bit.
+
+        The table is isotropic, so a cell's value holds at every half-vector
+        azimuth ``phi_h``; the ``k``-th cell is placed at ``phi_h = k`` times
+        the golden angle (:data:`GOLDEN_ANGLE`), so the pairs' half vectors
+        point along both tangents and in between.  (At ``phi_h = 0`` for all,
+        every half vector has ``h_y = 0`` and an anisotropic model's
+        ``alpha_y`` is traded freely against its scale.)"""
         from ..bxdf import as_directions, split
         from ..ops import NP
 
@@ -177,8 +198,9 @@ class MerlBRDF(BxDF):
         cells = idx[np.sort(np.unique(idx, return_index=True)[1])]
         ih, rest = np.divmod(cells, RES[1] * RES[2])
         id_, ip = np.divmod(rest, RES[2])
+        phi_h = np.mod(np.arange(cells.size) * GOLDEN_ANGLE, 2.0 * math.pi)
         return from_half_diff(((ih + 0.5) / RES[0]) ** 2 * HALF_PI, (id_ + 0.5) / RES[1] * HALF_PI,
-                              (ip + 0.5) / RES[2] * math.pi)
+                              (ip + 0.5) / RES[2] * math.pi, phi_h)
 
     def missing(self, wi, wo) -> np.ndarray:
         """Boolean mask: the pair falls in a cell without a measurement."""

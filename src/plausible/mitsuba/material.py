@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 
 from .. import library
+from ..bxdf import Params
 from ..params import ModelInfo, Param
 
 PLUGIN = "plausible_material"
@@ -59,7 +60,7 @@ class MaterialModel(library.Sum):
         fit = self.PARAMS[1].validate(fit, owner)
         m = library.material(name, fit)
         super().__init__(list(zip(m.parts, m.scales)), name=m.label)
-        self.params = {"name": name, "fit": fit}
+        self._params = Params({"name": name, "fit": fit})
         self.p = SimpleNamespace(**self.params)
         self.q = SimpleNamespace(**self.params)
 

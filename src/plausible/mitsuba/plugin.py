@@ -196,7 +196,7 @@ class ParamState:
         self.q_opaque = [k for k, f in self.flags.items()
                          if f == mi.ParamFlags.Differentiable and array_safe(mi, self.model, k)]
         self._set_sampling()
-        self.varying = [k for k, t in self.textures.items() if t.is_spatially_varying()]
+        self.varying = [k for k, t in self.textures.items() if P.texture_varies(t)]
         self.q_varying = [k for k in self.varying if array_safe(mi, self.model, k)]
         for k in set(self.varying) - set(self.q_varying):
             self._log(f"{plugin}: sampling uses the mean of texture {k!r} (the model's "
@@ -234,12 +234,16 @@ class ParamState:
         and what the hooks need (``q``, flags)."""
         vals = self.values()
         consts = {k: v for k, v in vals.items() if v is not None}
+        no_mean = []
         for name, tex in self.textures.items():
             prm = self.info.param(name)
-            mean = float(np.mean(np.asarray(tex.mean())))
+            mean = P.texture_mean(tex)
+            if mean is None:
+                no_mean.append(name)
+                continue
             consts[name] = min(max(mean, prm.lo), prm.hi)
-        model = self.make(**consts)
-        known = {k: t for k, t in self.textures.items() if self.known[k] and t.is_spatially_varying()}
+        model = self._make_without_means(consts, no_mean)
+        known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
         if known:
             base = {k: v for k, v in consts.items() if k not in known}
             pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
@@ -249,7 +253,27 @@ class ParamState:
         self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
         self._set_sampling()
         self.m_flags, self.sampled_type = bsdf_flags(
-            self.mi, model, self.info, any(t.is_spatially_varying() for t in self.textures.values()))
+            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()))
+
+    def _make_without_means(self, consts, no_mean):
+        """The NumPy model, with each texture that has no mean (``mesh_attribute``)
+        standing for its parameter's default, or the bottom of its range where the
+        default breaks a constraint with the other values.  That value serves only
+        the model's constants (flags, the sampling constants of a sampler that is
+        not array-safe in it): at a shading point the texture is evaluated and
+        clamped to the range."""
+        for name in no_mean:
+            prm = self.info.param(name)
+            d = prm.default
+            consts[name] = float(np.mean(d)) if d is not None else prm.lo
+        try:
+            return self.make(**consts)
+        except ValueError:
+            if not no_mean:
+                raise
+        for name in no_mean:
+            consts[name] = float(self.info.param(name).lo)
+        return self.make(**consts)
 
     def _set_sampling(self):
         """The sampling constants ``q`` of the model; opaque arrays, not literals,

@@ -218,16 +218,68 @@ def texture_texels(mi, tex):
         if leaf not in ("data", "value") or key.count(".") > 1 or \
                 (key.count(".") == 1 and key.split(".")[0] not in ("color0", "color1")):
             return None
-        a = np.array(params[key], dtype=np.float64)
-        if leaf == "data":          # TensorXf (height, width, channels)
+        a = np.array(params[key])
+        if leaf == "data":          # TensorXf / TensorXu8 (height, width, channels)
+            a = bitmap_values(a, bitmap_is_raw(tex, key))
             rows.append(a.reshape(-1, a.shape[-1]))
         else:                       # Color3f (3, 1) or Float (1,)
-            rows.append(a.reshape(1, -1))
+            rows.append(a.astype(np.float64).reshape(1, -1))
     if not rows:
         return None
     width = max(r.shape[1] for r in rows)
     return np.concatenate([np.broadcast_to(r, (len(r), width)) if r.shape[1] == 1 else r
                            for r in rows])
+
+
+def srgb_to_linear(c):
+    """The sRGB transfer function undone (IEC 61966-2-1), as Mitsuba's
+    ``mi.math.srgb_to_linear``: ``c / 12.92`` up to 0.04045, else
+    ``((c + 0.055) / 1.055)^2.4``."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, np.power((np.maximum(c, 0.04045) + 0.055) / 1.055, 2.4))
+
+
+def bitmap_values(data, raw: bool) -> np.ndarray:
+    """The values ``eval`` returns at the texels of a bitmap's ``data``: float
+    data as stored; 8-bit data (Mitsuba 3.9 keeps PNG and JPEG texels as
+    ``TensorXu8``) mapped 0..255 -> [0, 1] and, unless the texture is ``raw``,
+    sRGB-decoded (:func:`srgb_to_linear`), as Mitsuba does at each lookup."""
+    a = np.asarray(data)
+    if a.dtype != np.uint8:
+        return a.astype(np.float64)
+    a = a.astype(np.float64) / 255.0
+    return a if raw else srgb_to_linear(a)
+
+
+def bitmap_is_raw(tex, key: str) -> bool:
+    """Was the bitmap whose ``data`` is ``key`` of ``tex`` (``data``, or
+    ``color0.data`` in a checkerboard) loaded ``raw``?  Read from the texture's
+    printed form (``raw = 0|1``, Mitsuba 3's ``BitmapTexture::to_string``), the
+    only place Python can read it."""
+    text = repr(tex)
+    prefix = key.rsplit(".", 1)[0] if "." in key else ""
+    if prefix:
+        at = text.find(f"{prefix} = ")
+        text = text[at:] if at >= 0 else ""
+    at = text.find("raw = ")
+    return at >= 0 and text[at + 6:at + 7] == "1"
+
+
+def texture_mean(tex):
+    """The texture's mean (channel mean, a float), or None where the texture
+    has none: Mitsuba's ``mesh_attribute`` (vertex colours) raises
+    ``Texture::mean(): not implemented`` (its values live on the mesh)."""
+    try:
+        return float(np.mean(np.asarray(tex.mean())))
+    except RuntimeError:
+        return None
+
+
+def texture_varies(tex) -> bool:
+    """Does the texture vary over a surface?  ``is_spatially_varying()``, and
+    also every texture without a mean: Mitsuba 3.9's ``mesh_attribute`` says
+    False although its value changes from vertex to vertex."""
+    return bool(tex.is_spatially_varying()) or texture_mean(tex) is None
 
 
 def texture_range_known(mi, tex) -> bool:
@@ -345,5 +397,6 @@ def _show(v) -> str:
 __all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", "given_names",
            "check_material", "read_param", "read_model_spec", "read_structured", "read_choice",
            "read_number", "read_texture", "metal_textures", "texture_texels",
-           "texture_range_known", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",
+           "texture_range_known", "texture_mean", "texture_varies", "srgb_to_linear",
+           "bitmap_values", "bitmap_is_raw", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",
            "PointValues"]

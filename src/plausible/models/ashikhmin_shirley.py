@@ -149,14 +149,17 @@ def lobe_probabilities(ops, cos_i, rs, rd):
     own quotient.  ``pd`` is not ``1 - ps``: at grazing incidence ``Ad`` is
     ``O(cos(theta))`` and ``Fs`` near 1, so ``ps`` rounds to 1 (in float32 below
     ``cos = 1e-7``) and ``1 - ps`` to 0, and the pdf lost its diffuse part while
-    ``f`` kept it (sample weights of 6e6).  ``(1, 0)`` where ``Fs + Ad == 0``."""
+    ``f`` kept it (sample weights of 6e6).  ``(1, 0)`` where ``Fs + Ad == 0``.
+    Each is a true quotient, not a product with ``1/(Fs + Ad)``: with ``rs = 0``
+    and ``rd = 1e-310`` (float32: ``1e-39``) the sum is subnormal, its reciprocal
+    overflows, and ``0 * inf`` made the pdf NaN."""
     c = ops.maximum(cos_i, 0.0)
     fs = schlick(ops, c, rs)
     ad = diffuse_albedo(c, rs, rd)
     s = fs + ad
     pos = s > 0
-    inv = 1.0 / ops.where(pos, s, 1.0)
-    return ops.where(pos, fs * inv, 1.0), ops.where(pos, ad * inv, 0.0)
+    den = ops.where(pos, s, 1.0)
+    return ops.where(pos, fs / den, 1.0), ops.where(pos, ad / den, 0.0)
 
 
 def specular_pdf(ops, wi, wo, nu, nv):

@@ -57,6 +57,7 @@ cosine weighted.  ``pdf`` is the same mixture.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,11 +65,16 @@ import numpy as np
 from .. import vec, warps
 from ..bxdf import BxDF, above
 from ..ops import INV_PI, PI
-from ..params import Param
+from ..params import Param, parse_groups
 from ..registry import register
 
 #: Largest lobe exponent accepted (the same range as the Phong family's ``n``).
 N_MAX = 1e6
+
+#: How the lobes are written on the command line (shown by every error of :class:`LobesParam`).
+FORMS = ("on the command line -p lobes=cx,cy,cz,n,rho (one lobe), "
+         "-p 'lobes=cx,cy,cz,n,rho;cx,cy,cz,n,rho' or -p 'lobes=(cx, cy, cz, n, rho), (cx, cy, cz, n, rho)', "
+         "e.g. -p lobes=-1,-1,1,20,1.75")
 
 #: Default: one reciprocal-Phong lobe of exponent 20 and albedo 0.5 at normal
 #: incidence (``rho = 0.5 (n + 2) / (2 pi)``), with ``rd = 0.3``.
@@ -92,13 +98,23 @@ class LobesParam(Param):
 
     def validate(self, value, owner: str = "model"):
         where = f"{owner}: parameter '{self.name}'"
-        rng = self.range_text()
-        if isinstance(value, (str, bytes)) or np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
+        rng = self.range_text() + "; " + FORMS
+        if isinstance(value, str):
+            try:    # the command line's forms (plausible.params.parse_groups)
+                value = parse_groups(value)
+            except ValueError:
+                raise ValueError(f"{where} must be {rng}, got {value!r}") from None
+        if isinstance(value, bytes) or np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
             raise ValueError(f"{where} must be {rng}, got {value!r}")
         try:
             items = list(value)
         except TypeError:
             raise ValueError(f"{where} must be {rng}, got {value!r}") from None
+        if items and all(isinstance(x, numbers.Real) for x in items):
+            if len(items) != 5:
+                raise ValueError(f"{where}: one lobe is 5 numbers (cx, cy, cz, n, rho), got {len(items)} "
+                                 f"numbers {value!r}; {rng}")
+            items = [items]     # one lobe given as its five numbers (-p lobes=-1,-1,1,20,1.75)
         out = []
         for i, lobe in enumerate(items):
             try:
@@ -138,8 +154,9 @@ def normalised_lobes(lobes):
         m = c_max((cx, cy, cz))
         if m == 0.0:
             continue
-        scale = math.exp(n * math.log(m))  # m^n; exactly 1 for m == 1
-        out.append((cx / m, cy / m, cz / m, n, rho * scale))
+        log_scale = n * math.log(m)   # m^n; exactly 1 for m == 1 (inf past the float range:
+        scale = math.exp(log_scale) if log_scale < 709.0 else math.inf   # the bound then refuses it)
+        out.append((cx / m, cy / m, cz / m, n, rho * scale if rho > 0 else 0.0))
     return out
 
 
@@ -195,9 +212,56 @@ def lobe_axis_and_estimate(ops, wi, lobe):
     return d, ops.where(ok, e, 0.0)
 
 
-def lobe_pdf(ops, d, wo, n):
-    """``(n + 1) / (2 pi) max(d . wo, 0)^n``: density of the ``cos^n`` warp about ``d``."""
-    return warps.power_cosine_lobe_pdf(ops, n, vec.dot(d, wo))
+#: The logarithm standing for a weight of zero (finite, so that every backend,
+#: the GLSL export included, can subtract from it).
+LOG_ZERO = -1e30
+
+
+def lobe_axis_and_log_estimate(ops, wi, lobe):
+    """:func:`lobe_axis_and_estimate` with the estimate as its logarithm
+    ``log E = log rho + (n/2) log |C wi|^2 + log(2 pi / (n + 2)) + log((1 + d_z)/2)``
+    (:data:`LOG_ZERO` where ``E = 0``): ``rho |C wi|^n`` may be a float64
+    subnormal, which Dr.Jit flushes to zero (the pdf then lost the lobe while
+    NumPy kept it, so the answer depended on the batch size)."""
+    a = lobe_vector(wi, lobe)
+    len2 = vec.dot(a, a)
+    ok = len2 > 0
+    safe = ops.where(ok, len2, 1.0)
+    d = vec.scale(a, ops.where(ok, 1.0 / ops.sqrt(safe), 0.0))
+    n, rho = lobe[3], lobe[4]
+    half = 0.5 * (1.0 + d[2])
+    good = ok & (half > 0)
+    if not rho > 0:
+        return d, ops.where(good, LOG_ZERO, LOG_ZERO)
+    log_e = (0.5 * n) * ops.log(safe) + (math.log(rho) + math.log(2.0 * PI / (n + 2.0))) \
+        + ops.log(ops.where(half > 0, half, 1.0))
+    return d, ops.where(good, log_e, LOG_ZERO)
+
+
+def mixture_weights(ops, rd, log_estimates):
+    """``(w_d, [w_k])``: the diffuse weight ``rd`` and the lobes' estimates divided by
+    the largest of them (computed from the logarithms, so a lobe whose estimate is
+    subnormal still has its share when every component is that small)."""
+    log_rd = math.log(rd) if isinstance(rd, (int, float)) and rd > 0 else LOG_ZERO \
+        if isinstance(rd, (int, float)) else ops.where(rd > 0, ops.log(ops.maximum(rd, 1e-300)), LOG_ZERO)
+    top = log_rd
+    for le in log_estimates:
+        top = ops.maximum(top, le)
+    return ops.exp(log_rd - top), [ops.exp(le - top) for le in log_estimates]
+
+
+def lobe_pdf(ops, wi, wo, lobe):
+    """``(n + 1) / (2 pi) max(d . wo, 0)^n``: density of the ``cos^n`` warp about
+    ``d = C wi / |C wi|``, with ``d . wo`` taken as ``(C wi . wo) / |C wi|`` so
+    that it is positive exactly where the lobe of ``f`` is (:func:`lobe_value`
+    tests ``C wi . wo > 0``): a direction on the lobe's rim (``u = 0`` in the
+    warp) rounded to one side in ``f`` and to the other in the pdf, and a
+    mixture with a tiny diffuse part weighted it ``rho / (rd / pi)``, 1e58."""
+    a = lobe_vector(wi, lobe)
+    len2 = vec.dot(a, a)
+    ok = len2 > 0
+    cos = vec.dot(a, wo) / ops.sqrt(ops.where(ok, len2, 1.0))
+    return ops.where(ok, warps.power_cosine_lobe_pdf(ops, lobe[3], cos), 0.0)
 
 
 @register("lafortune",
@@ -239,32 +303,34 @@ class Lafortune(BxDF):
         return lafortune(ops, wi, wo, p.rd, normalised_lobes(p.lobes))
 
     def _weights(self, ops, wi, q):
-        """Axes and unnormalised mixture weights (diffuse first)."""
-        axes, est = [], []
+        """Axes, the mixture weights of the diffuse term and of each lobe (relative
+        to the largest: :func:`mixture_weights`) and their sum."""
+        axes, logs = [], []
         for lobe in normalised_lobes(q.lobes):
-            d, e = lobe_axis_and_estimate(ops, wi, lobe)
-            axes.append((d, lobe[3]))
-            est.append(e)
-        total = q.rd
+            d, le = lobe_axis_and_log_estimate(ops, wi, lobe)
+            axes.append((d, lobe))
+            logs.append(le)
+        w_d, est = mixture_weights(ops, q.rd, logs)
+        total = w_d
         for e in est:
             total = total + e
-        return axes, est, total
+        return axes, w_d, est, total
 
     def _pdf(self, ops, wi, wo, q):
-        axes, est, total = self._weights(ops, wi, q)
-        val = q.rd * warps.cosine_hemisphere_pdf(ops, wo)
-        for (d, n), e in zip(axes, est):
-            val = val + e * lobe_pdf(ops, d, wo, n)
+        axes, w_d, est, total = self._weights(ops, wi, q)
+        val = w_d * warps.cosine_hemisphere_pdf(ops, wo)
+        for (d, lobe), e in zip(axes, est):
+            val = val + e * lobe_pdf(ops, wi, wo, lobe)
         pos = total > 0
         return ops.where(above(ops, wi, wo) & pos, val / ops.where(pos, total, 1.0), 0.0)
 
     def _sample(self, ops, wi, u, q):
-        axes, est, total = self._weights(ops, wi, q)
+        axes, w_d, est, total = self._weights(ops, wi, q)
         t = u[0] * total
         out = warps.cosine_hemisphere(ops, u[1], u[2])
-        start = q.rd
-        for (d, n), e in zip(axes, est):
-            lobe = warps.power_cosine_lobe_about(ops, d, n, u[1], u[2])
+        start = w_d
+        for (d, lobe_k), e in zip(axes, est):
+            lobe = warps.power_cosine_lobe_about(ops, d, lobe_k[3], u[1], u[2])
             # Component k covers t in [start_k, start_k + E_k); a later match wins.
             out = warps.mixture(ops, (t >= start) & (e > 0), lobe, out)
             start = start + e

@@ -28,6 +28,7 @@ from ..bxdf import BxDF, above
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
+from ..text import fmt
 
 EXPONENT = dict(lo=0.0, hi=1e6, doc="Phong exponent n (larger is sharper)", extremes=(0.0, 1.0, 1e4))
 
@@ -122,7 +123,7 @@ class ModifiedPhong(BxDF):
         total = np.asarray(self.params["kd"]) + np.asarray(self.params["ks"])
         if np.any(total > 1.0 + 1e-12):
             raise ValueError("ModifiedPhong: parameters 'kd' + 'ks' must not exceed 1 "
-                             f"(energy conservation), got kd + ks = {total}")
+                             f"(energy conservation), got kd + ks = {fmt(total)}")
 
     @staticmethod
     def spec_probability(q):

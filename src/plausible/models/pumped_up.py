@@ -5,7 +5,11 @@ An operator on any reciprocal BRDF ``f`` (``neumann-neumann-szirmay-kalos-albedo
 * eq. 16: ``f*(L, V) = f(L, V) / g(L, V)`` with ``g`` symmetric and
   ``max(a(L), a(V)) <= g(L, V)`` (eq. 17), ``a`` the directional albedo of ``f``;
 * eq. 20: ``g1(L, V) = max(a(L), a(V))`` (``correction="max"``);
-* eq. 21: ``g2(L, V) = max(a(L), a(V), (N.V)(N.L))`` (``correction="controlled"``).
+* eq. 21: ``g2(L, V) = max(a(L), a(V), N.V, N.L)`` (``correction="controlled"``; the
+  control term caps the total correction of repeated pumpings, see :func:`correction`);
+  ``correction="controlled-product"`` is the other reading of the OCR'd text,
+  ``max(a(L), a(V), (N.V)(N.L))`` at every level (docs/models/pumped-up.md says
+  why the first is followed).
 
 Then ``a(L) <= a*(L) <= 1`` (eq. 18-19): ``a*(L) = int f / g cos <= int f / a(L) cos = 1``.
 The proof needs only ``g >= max(a(L), a(V))``; the upper bound ``g <= 1`` of
@@ -18,7 +22,8 @@ with ``G = 1``: the paper's sec. 2.1) has no finite ``g`` and is refused
 (:func:`check_bounded_albedo`).
 
 Applied ``times`` times, each level divides by the ``g`` built from the albedo of
-the level below: ``f_k = f_{k-1} / g(a_{k-1})``.  Each level's albedo is
+the level below: ``f_k = f_{k-1} / g(a_{k-1})`` (for ``"controlled"``, ``f_k = f /
+max(prod_j g1(a_j), N.L, N.V)``).  Each level's albedo is
 integrated once with :func:`plausible.analysis.albedo_table` (the accurate
 quadrature; 1-D in ``theta`` for an isotropic base, 2-D with azimuth otherwise),
 interpolated with Catmull-Rom cubics (:class:`plausible.tables.AngleTable`), and
@@ -27,6 +32,9 @@ cached in memory and on disk (see :func:`table_cache_dir`).
 Colour bases: ``g`` uses the largest channel of the albedo.  It still satisfies
 eq. 17's lower bound for every channel (so every channel stays energy
 conserving), and it keeps the base's hue.  For a grey base it is the paper's operator.
+
+``times = 0`` is the base itself (no table), times the Fresnel factor: the unpumped
+row of the paper's fig. 8, rendered through the same plugin as the pumped one.
 
 Fresnel: the pumped lobe may be multiplied by a Fresnel factor ``F(L.H)``
 (:func:`plausible.fresnel.weight`; ``L.H = V.H`` keeps it reciprocal, ``F <= 1``
@@ -54,6 +62,7 @@ from .. import fresnel, vec
 from ..bxdf import BxDF, above
 from ..params import Param
 from ..registry import register
+from ..registry import spec_of as registry_spec_of
 
 #: Tables built in this process: key -> AngleTable.
 _TABLES: dict = {}
@@ -101,8 +110,28 @@ class ModelParam(Param):
 
 
 def spec_of(model) -> str:
-    """A canonical text of a model and its parameters (the cache key)."""
+    """A canonical text of a model and its parameters (the cache key): the
+    registry's spec string, whose floats are exact (``repr``), else the class and
+    its parameters at full precision.  Not ``repr(model)``: it prints 6
+    significant digits, so ``n=20`` and ``n=20.00004`` shared a table."""
+    if getattr(model, "info", None) is not None:
+        return registry_spec_of(model)
+    params = getattr(model, "params", None)
+    if isinstance(params, dict):
+        return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
+            f"{k}={_exact(v)}" for k, v in params.items()) + ")"
     return repr(model)
+
+
+def _exact(v) -> str:
+    """A parameter value as text that tells apart any two different values."""
+    if isinstance(v, BxDF):
+        return "[" + spec_of(v) + "]"
+    if isinstance(v, np.ndarray):
+        return repr(v.astype(np.float64).tolist())
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_exact(x) for x in v) + ")"
+    return repr(float(v)) if isinstance(v, float) else repr(v)
 
 
 @lru_cache(maxsize=None)
@@ -211,17 +240,42 @@ def check_bounded_albedo(model, owner: str = "PumpedUp", progress=None) -> None:
             f"'cook-torrance' with geometry=vgroove or 'ward' with variant=balanced.")
 
 
-def correction(ops, kind, a_l, a_v, wi, wo):
-    """``g1 = max(a(L), a(V))`` (eq. 20) or ``g2 = max(a(L), a(V), (N.V)(N.L))`` (eq. 21)."""
-    g = ops.maximum(a_l, a_v)
+#: The corrections: eq. 20; eq. 21 read as a four-way maximum that caps the total
+#: correction; eq. 21 read as the OCR prints it, a product, at every level.
+CORRECTIONS = ("max", "controlled", "controlled-product")
+
+
+def correction(ops, kind, albedos, wi, wo):
+    """The divisor ``G_k`` of ``f_k = f / G_k`` after ``k = len(albedos)`` pumpings;
+    ``albedos`` holds the pairs ``(a_j(L), a_j(V))`` of the levels ``j = 0 .. k-1``
+    (``a_j``: the albedo of the model pumped ``j`` times).
+
+    * ``"max"`` (eq. 20): ``G_k = prod_j g1_j``, ``g1_j = max(a_j(L), a_j(V))``.
+    * ``"controlled"`` (eq. 21, ``g2 = max(a(L), a(V), N.V, N.L)``, the OCR's
+      ``max(a(L)v a(V)v (N : V)) (N ) L))`` with its commas restored):
+      ``G_k = max(prod_j g1_j, N.L, N.V)``.  One pumping is eq. 21 exactly; the
+      control term caps the total correction, so ``f_k cos(theta_L) <= f`` at every
+      level (the output radiance never exceeds the base's, sec. 3.2 and 5) and the
+      limit ``k -> oo`` is ``f / max(N.L, N.V)``: eq. 22 for the Phong base.  Each
+      level's own factor ``G_k / G_(k-1)`` lies between ``max(a_(k-1)(L), a_(k-1)(V))``
+      and 1, so every level satisfies eq. 17.
+    * ``"controlled-product"``: eq. 21 read as printed, ``max(a(L), a(V), (N.V)(N.L))``,
+      applied at every level: ``G_k = prod_j max(g1_j, (N.V)(N.L))``.
+    """
+    total = 1.0
+    for a_l, a_v in albedos:
+        g = ops.maximum(a_l, a_v)
+        if kind == "controlled-product":
+            g = ops.maximum(g, wi[2] * wo[2])
+        total = total * g
     if kind == "controlled":
-        g = ops.maximum(g, wi[2] * wo[2])
-    return g
+        total = ops.maximum(total, ops.maximum(wi[2], wo[2]))
+    return total
 
 
 @register("pumped-up",
           "Albedo pumping-up of a reciprocal base (Neumann et al. 1999, eq. 16, 20, 21): "
-          "f* = f / g, g = max(a(L), a(V)) [max] or max(a(L), a(V), N.L N.V) [controlled], "
+          "f* = f / g, g = max(a(L), a(V)) [max] or max(a(L), a(V), N.L, N.V) [controlled], "
           "applied 'times' times.",
           references=("Neumann, Neumann, Szirmay-Kalos, albedo pumping-up, 1999, sec. 3, eq. 16-21",))
 class PumpedUp(BxDF):
@@ -232,10 +286,12 @@ class PumpedUp(BxDF):
         ModelParam("base", "reciprocal-phong:ks=1:n=20",
                    doc="the reciprocal base model, 'name:k=v:...'",
                    extremes=("reciprocal-blinn:ks=1:n=20",)),
-        Param("correction", "max", kind="choice", choices=("max", "controlled"),
-              doc="g1 = max(a(L), a(V)) (eq. 20) or controlled g2 (eq. 21)",
+        Param("correction", "max", kind="choice", choices=CORRECTIONS,
+              doc="g1 = max(a(L), a(V)) (eq. 20), controlled g2 = max(a(L), a(V), N.V, N.L) capping the "
+                  "total (eq. 21), or eq. 21 as printed, max(a(L), a(V), (N.V)(N.L)) at every level",
               extremes=("controlled",)),
-        Param("times", 1, 1, 8, integer=True, doc="how many times the operator is applied",
+        Param("times", 1, 0, 8, integer=True, doc="how many times the operator is applied (0: the base, "
+              "times the Fresnel factor)",
               extremes=(3,)),
         Param("fresnel", "none", kind="choice", choices=fresnel.FRESNEL_CHOICES,
               doc="Fresnel factor at L.H multiplied on the pumped lobe"),
@@ -250,7 +306,8 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
-        check_bounded_albedo(base, progress=progress)
+        if self.params["times"] > 0:
+            check_bounded_albedo(base, progress=progress)
         self.tables = []
         level = base
         for t in range(1, self.params["times"] + 1):
@@ -265,12 +322,9 @@ class PumpedUp(BxDF):
         self.channels = chans.pop() if chans else None
 
     def g(self, ops, wi, wo):
-        """The product of the corrections of every level."""
-        total = 1.0
-        for tab in self.tables:
-            total = total * correction(ops, self.params["correction"], tab.lookup(ops, wi),
-                                       tab.lookup(ops, wo), wi, wo)
-        return total
+        """The total correction of every level (:func:`correction`)."""
+        return correction(ops, self.params["correction"],
+                          [(tab.lookup(ops, wi), tab.lookup(ops, wo)) for tab in self.tables], wi, wo)
 
     def _f(self, ops, wi, wo, p):
         f = self.base._f(ops, wi, wo, self.base.p)

@@ -10,6 +10,9 @@ const state = {
   thetaI: 30, light: [-0.45, 0.55, 0.70], exposure: 0, env: 0.3, logPlot: false,
   data: { A: {}, B: {} },               // last view data per side (read by the tests)
   lobeTurn: 0.6, pending: 0,
+  perLobe: true,                        // each lobe (polar plot, 3-D lobe) to its own maximum
+  plotScale: {}, lobeScale: {},         // the maximum each side's curve is drawn against (read by the tests)
+  albedoAxis: null,                     // {top, ticks} of the albedo plot's y axis
 };
 window.explorer = state;
 
@@ -21,7 +24,11 @@ async function api(path, body) {
       method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
     const ct = r.headers.get("content-type") || "";
     const out = ct.includes("json") ? await r.json() : await r.text();
-    if (!r.ok) throw new Error(out && out.error ? out.error : `${path}: HTTP ${r.status}`);
+    if (!r.ok) {
+      const e = new Error(out && out.error ? out.error : `${path}: HTTP ${r.status}`);
+      e.status = r.status;        // 422: the model refused the parameters
+      throw e;
+    }
     return out;
   } finally { state.pending--; }
 }
@@ -31,6 +38,8 @@ function setStatus(text, error = false) {
   s.textContent = text;
   s.className = error ? "error" : "";
 }
+
+function clone(x) { return JSON.parse(JSON.stringify(x)); }
 
 function debounce(fn, ms) {
   let t = null;
@@ -134,8 +143,9 @@ async function selectModel(side, name) {
   const m = state.byName[name];
   const params = {};
   for (const p of m.params) params[p.name] = p.default;
-  state.sides[side] = { name, params };
+  state.sides[side] = { name, params, valid: clone(params) };
   state.data[side] = {};
+  markComputing(side);
   document.getElementById(`sphere-${side}`).hidden = false;
   document.getElementById(`slice-${side}`).hidden = false;
   buildControls(side);
@@ -146,6 +156,7 @@ async function selectModel(side, name) {
 function setParam(side, name, value, structural = false) {
   const s = state.sides[side];
   s.params[name] = value;
+  markComputing(side);
   const u = s.uniforms && s.uniforms.find((x) => x.param === name);
   if (u && !structural) { drawSphere(side); } else { refreshShaderSoon[side](); }
   refreshFastSoon[side](); refreshSlowSoon[side]();
@@ -227,9 +238,30 @@ function compile(gl, type, src) {
   return sh;
 }
 
+// A verdict takes seconds: the old one goes at once and a sign says one is coming.
+function markComputing(side) {
+  state.data[side].verdict = null; state.data[side].verdictPending = true;
+  document.getElementById(`verdict-${side}`).innerHTML =
+    `<p class="computing"><b style="color:${COLORS[side]}">${side}</b>: computing the verdict…</p>`;
+}
+
+// A parameter set the model refuses (422): the controls, the sphere and the plots go back
+// to the last set it accepted, and the status line says why (the model's own message).
+function refuse(side, e, my) {
+  const s = state.sides[side];
+  if (!s || stamp(side) !== my) return;            // a stale answer: the side has moved on
+  if (e.status !== 422 || !s.valid) { setStatus(e.message, true); return; }
+  s.params = clone(s.valid);
+  buildControls(side);
+  refreshShader(side);
+  refreshSlowSoon[side]();
+  setStatus(`${side}: refused: ${e.message}. Back to the last valid values.`, true);
+}
+
 async function refreshShader(side) {
   const s = state.sides[side];
   if (!s) return;
+  const my = stamp(side);
   try {
     const sh = await api("/api/shader", body(side, { prefix: `m${side}` }));
     const gl = glFor(side);
@@ -242,7 +274,7 @@ async function refreshShader(side) {
     if (s.program) gl.deleteProgram(s.program);
     s.program = prog; s.uniforms = sh.uniforms; s.source = sh.source;
     drawSphere(side);
-  } catch (e) { setStatus(e.message, true); }
+  } catch (e) { refuse(side, e, my); }
 }
 const refreshShaderSoon = { A: debounce(() => refreshShader("A"), 150), B: debounce(() => refreshShader("B"), 150) };
 
@@ -280,30 +312,34 @@ function stamp(side) { const s = state.sides[side]; return s && JSON.stringify([
 async function refreshFast(side) {
   const s = state.sides[side];
   if (!s) return;
-  const my = stamp(side), asked = body(side);
+  const my = stamp(side), asked = clone(body(side));
   try {
-    const [pl, lobe, sl, val] = await Promise.all([api("/api/plane", asked), api("/api/lobe3d", asked),
-      api("/api/slice", asked), api("/api/validate", asked)]);
+    const val = await api("/api/validate", asked);     // first: a refused set draws nothing
     if (stamp(side) !== my) return;
-    Object.assign(state.data[side], { plane: pl, lobe: lobe, slice: sl, asked: JSON.parse(JSON.stringify(asked)) });
+    s.valid = clone(asked.params);
+    const [pl, lobe, sl] = await Promise.all([api("/api/plane", asked), api("/api/lobe3d", asked),
+      api("/api/slice", asked)]);
+    if (stamp(side) !== my) return;
+    Object.assign(state.data[side], { plane: pl, lobe: lobe, slice: sl, asked: asked });
     document.getElementById("spec-A").textContent = side === "A" ? val.model : document.getElementById("spec-A").textContent;
     setStatus("");
     drawSlice(side); redrawPlots();
-  } catch (e) { setStatus(e.message, true); }
+  } catch (e) { refuse(side, e, my); }
 }
 async function refreshSlow(side) {
   const s = state.sides[side];
   if (!s) return;
   const my = stamp(side).replace(/,[^,]*\]$/, "");      // the albedo and the verdict do not depend on theta_i
   const same = () => state.sides[side] && stamp(side).replace(/,[^,]*\]$/, "") === my;
+  const full = stamp(side);
   try {
     const alb = await api("/api/albedo", body(side));
     if (!same()) return;
     state.data[side].albedo = alb; redrawPlots(); albedoTable();
     const v = await api("/api/check", body(side));
     if (!same()) return;
-    state.data[side].verdict = v; drawVerdict(side);
-  } catch (e) { setStatus(e.message, true); }
+    state.data[side].verdict = v; state.data[side].verdictPending = false; drawVerdict(side);
+  } catch (e) { if (same()) refuse(side, e, full); }
 }
 const refreshFastSoon = { A: debounce(() => refreshFast("A"), 40), B: debounce(() => refreshFast("B"), 40) };
 const refreshSlowSoon = { A: debounce(() => refreshSlow("A"), 700), B: debounce(() => refreshSlow("B"), 700) };
@@ -321,30 +357,43 @@ function drawPolar() {
   g.beginPath(); g.moveTo(cx - R, cy); g.lineTo(cx + R, cy); g.stroke();
   const ti = state.thetaI * Math.PI / 180;     // light on the -x side
   g.strokeStyle = "#e0a000"; g.beginPath(); g.moveTo(cx, cy); g.lineTo(cx - R * Math.sin(ti), cy - R * Math.cos(ti)); g.stroke();
-  let top = 0;
-  for (const k of sides()) { const d = state.data[k].plane; if (d) top = Math.max(top, ...d.fcos); }
+  const tops = {};
+  for (const k of sides()) { const d = state.data[k].plane; if (d) tops[k] = Math.max(...d.fcos); }
+  const top = Math.max(0, ...Object.values(tops));
   if (top <= 0) return;
-  const tr = (v) => state.logPlot ? Math.max(0, 1 + Math.log10(Math.max(v / top, 1e-4)) / 4) : v / top;
+  state.plotScale = {};
+  for (const k in tops) state.plotScale[k] = state.perLobe && tops[k] > 0 ? tops[k] : top;
+  const tr = (v, t) => state.logPlot ? Math.max(0, 1 + Math.log10(Math.max(v / t, 1e-4)) / 4) : v / t;
   for (const k of sides()) {
     const d = state.data[k].plane; if (!d) continue;
+    const sc = state.plotScale[k];
     g.strokeStyle = COLORS[k]; g.lineWidth = 2; g.beginPath();
     d.theta_o.forEach((t, i) => {
-      const a = t * Math.PI / 180, r = R * tr(d.fcos[i]);
+      const a = t * Math.PI / 180, r = R * tr(d.fcos[i], sc);
       const x = cx + r * Math.sin(a), y = cy - r * Math.cos(a);
       i ? g.lineTo(x, y) : g.moveTo(x, y);
     });
     g.stroke(); g.lineWidth = 1;
   }
   g.fillStyle = "#555"; g.font = "11px sans-serif";
-  g.fillText(`max f·cos = ${top.toPrecision(4)}${state.logPlot ? " (4 decades)" : ""}`, 5, 12);
+  const several = Object.keys(tops).length > 1;
+  if (several && state.perLobe) {
+    g.fillText(`max f·cos: ${Object.keys(tops).map((k) => `${k} ${tops[k].toPrecision(4)}`).join(", ")} ` +
+      `(each lobe to its own scale)${state.logPlot ? " (4 decades)" : ""}`, 5, 12);
+  } else {
+    g.fillText(`max f·cos = ${top.toPrecision(4)}${state.logPlot ? " (4 decades)" : ""}`, 5, 12);
+  }
 }
 
 function drawLobe() {
   const c = document.getElementById("lobe3d"), g = c.getContext("2d");
   g.clearRect(0, 0, c.width, c.height);
-  let top = 0;
-  for (const k of sides()) { const d = state.data[k].lobe; if (d) for (const row of d.fcos) top = Math.max(top, ...row); }
+  const tops = {};
+  for (const k of sides()) { const d = state.data[k].lobe; if (d) tops[k] = Math.max(...d.fcos.map((row) => Math.max(...row))); }
+  const top = Math.max(0, ...Object.values(tops));
   if (top <= 0) return;
+  state.lobeScale = {};
+  for (const k in tops) state.lobeScale[k] = state.perLobe && tops[k] > 0 ? tops[k] : top;
   const az = state.lobeTurn, el = 0.45, S = Math.min(c.width, c.height) * 0.42, ox = c.width / 2, oy = c.height * 0.8;
   const proj = (x, y, z) => {
     const x1 = x * Math.cos(az) - y * Math.sin(az), y1 = x * Math.sin(az) + y * Math.cos(az);
@@ -356,7 +405,7 @@ function drawLobe() {
   for (const k of sides()) {
     const d = state.data[k].lobe; if (!d) continue;
     const P = d.theta.map((t, i) => d.phi.map((p, j) => {
-      const r = d.fcos[i][j] / top, T = t * Math.PI / 180, F = p * Math.PI / 180;
+      const r = d.fcos[i][j] / state.lobeScale[k], T = t * Math.PI / 180, F = p * Math.PI / 180;
       return proj(r * Math.sin(T) * Math.cos(F), r * Math.sin(T) * Math.sin(F), r * Math.cos(T));
     }));
     g.strokeStyle = COLORS[k]; g.globalAlpha = 0.55; g.beginPath();
@@ -379,13 +428,24 @@ function drawAlbedo() {
   const c = document.getElementById("albedo"), g = c.getContext("2d");
   g.clearRect(0, 0, c.width, c.height);
   const L = 40, B = c.height - 25, W = c.width - L - 10, H = B - 10;
-  let top = 1.1;     // up to 2: larger values (energy gained) are clipped at the top and marked
-  for (const k of sides()) { const a = state.data[k].albedo; if (a) top = Math.max(top, ...a.max.map((x) => Math.min(x * 1.05, 2))); }
+  // the y axis covers every curve, its band and the energy markers (the largest channel)
+  let top = 1.1;
+  const colour = [];
+  for (const k of sides()) {
+    const a = state.data[k].albedo; if (!a) continue;
+    a.value.forEach((v, i) => { top = Math.max(top, (channelMean(v) + channelMean(a.error[i])) * 1.05); });
+    top = Math.max(top, ...a.max.map((x) => x * 1.05));
+    if (Array.isArray(a.value[0])) colour.push(`${k}: mean of its ${a.value[0].length} channels`);
+  }
+  const ticks = niceTicks(top);
+  state.albedoAxis = { top, ticks };
+  document.getElementById("albedo-note").textContent = colour.length ?
+    `colour models show the channel mean (${colour.join("; ")}); red marks: the largest channel` : "";
   const X = (t) => L + W * t / 90, Y = (v) => B - H * Math.min(v, top) / top;
   g.strokeStyle = "#999"; g.strokeRect(L, 10, W, H);
   g.fillStyle = "#555"; g.font = "11px sans-serif";
   for (const t of [0, 30, 60, 90]) g.fillText(`${t}°`, X(t) - 8, B + 14);
-  for (const v of [0, 0.5, 1]) g.fillText(v.toFixed(1), 8, Y(v) + 4);
+  for (const v of ticks) g.fillText(+v.toPrecision(3) + "", 4, Y(v) + 4);
   g.setLineDash([4, 3]); g.strokeStyle = "#888"; g.beginPath(); g.moveTo(L, Y(1)); g.lineTo(L + W, Y(1)); g.stroke(); g.setLineDash([]);
   for (const k of sides()) {
     const a = state.data[k].albedo; if (!a) continue;
@@ -400,6 +460,15 @@ function drawAlbedo() {
     g.fillStyle = "#d00";
     for (const t of a.energy_gained_at) { const i = a.theta.indexOf(t); g.beginPath(); g.arc(X(t), Y(a.max[i]), 4, 0, 2 * Math.PI); g.fill(); }
   }
+}
+
+// Round tick values from 0 up to (at most) top: 4 to 8 of them, steps of 1, 2 or 5 times a power of 10.
+function niceTicks(top) {
+  const raw = top / 5, p = Math.pow(10, Math.floor(Math.log10(raw)));
+  const step = [1, 2, 5, 10].map((m) => m * p).find((s) => top / s <= 8);
+  const out = [];
+  for (let v = 0; v <= top + 1e-12; v += step) out.push(+v.toPrecision(12));
+  return out;
 }
 
 function albedoTable() {
@@ -428,19 +497,35 @@ function drawSlice(side) {
   const n = d.f.length; c.width = c.height = n;
   const img = g.createImageData(n, n);
   let top = 0; for (const row of d.f) top = Math.max(top, ...row);
+  state.data[side].sliceMax = top;
   for (let i = 0; i < n; i++) for (let j = 0; j < n; j++) {
     const v = d.f[i][j], x = v > 0 && top > 0 ? 1 + Math.log10(v / top) / 4 : 0;
     const [r, gg, b] = v > 0 ? cmap(x) : [0, 0, 0];
     const o = 4 * (i * n + j); img.data[o] = r; img.data[o + 1] = gg; img.data[o + 2] = b; img.data[o + 3] = 255;
   }
   g.putImageData(img, 0, 0);
+  drawSliceBar();
+}
+
+// The colour bar of the slices: viridis over 4 decades below each slice's own maximum.
+function drawSliceBar() {
+  const c = document.getElementById("slice-bar"), g = c.getContext("2d");
+  for (let y = 0; y < c.height; y++) {
+    const [r, gg, b] = cmap(1 - y / (c.height - 1));
+    g.fillStyle = `rgb(${r},${gg},${b})`; g.fillRect(0, y, c.width, 1);
+  }
+  const tops = sides().filter((k) => state.data[k].sliceMax !== undefined)
+    .map((k) => `${k} ${state.data[k].sliceMax.toPrecision(4)}`);
+  document.getElementById("slice-scale").innerHTML =
+    `<span>max f (${tops.join(", ")})</span><span>10⁻² max</span><span>10⁻⁴ max; black: 0</span>`;
 }
 
 function drawVerdict(side) {
   const v = state.data[side].verdict, box = document.getElementById(`verdict-${side}`);
   if (!v) { box.innerHTML = ""; return; }
-  const rows = v.results.map((r) => `<tr><td>${r.name}</td><td class="${r.passed ? "pass" : "fail"}">${r.passed ? "passes" : "FAILS"}</td>` +
-    `<td>${typeof r.figure === "number" ? r.figure.toPrecision(4) : r.figure}</td><td>${r.bound}</td></tr>`);
+  const word = (r) => r.passed === null ? ["na", "not applicable"] : r.passed ? ["pass", "passes"] : ["fail", "FAILS"];
+  const rows = v.results.map((r) => `<tr><td>${r.name}</td><td class="${word(r)[0]}">${word(r)[1]}</td>` +
+    `<td>${typeof r.figure === "number" ? r.figure.toPrecision(4) : "—"}</td><td>${r.bound}</td></tr>`);
   box.innerHTML = `<p><b style="color:${COLORS[side]}">${side}: ${v.model}</b> — ` +
     `<span class="${v.as_claimed ? "pass" : "fail"}">${v.as_claimed ? "agrees with its claims" : "does not hold its claims"}</span> ` +
     `(claims: ${v.claims.reciprocal ? "" : "not "}reciprocal, ${v.claims.energy_conserving ? "" : "not "}energy conserving)</p>` +
@@ -472,12 +557,13 @@ async function start() {
   }
   const th = document.getElementById("theta-i");
   th.addEventListener("input", () => {
-    state.thetaI = +th.value; document.getElementById("theta-i-out").textContent = `${th.value}°`;
+    state.thetaI = +th.value; document.getElementById("theta-i-out").textContent = `${(+th.value).toFixed(1)}°`;
     refreshFastSoon.A(); if (state.sides.B) refreshFastSoon.B(); drawPolar();
   });
   document.getElementById("exposure").addEventListener("input", (e) => { state.exposure = +e.target.value; drawSphere("A"); drawSphere("B"); });
   document.getElementById("env").addEventListener("input", (e) => { state.env = +e.target.value; drawSphere("A"); drawSphere("B"); });
   document.getElementById("log-plot").addEventListener("change", (e) => { state.logPlot = e.target.checked; drawPolar(); });
+  document.getElementById("per-lobe").addEventListener("change", (e) => { state.perLobe = e.target.checked; drawPolar(); drawLobe(); });
   for (const b of document.querySelectorAll("#exports button")) b.addEventListener("click", () => download(b.dataset.format));
   const first = state.byName["ashikhmin-shirley"] ? "ashikhmin-shirley" : state.models[0].name;
   document.getElementById("model-A").value = first;

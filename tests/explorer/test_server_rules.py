@@ -1,0 +1,119 @@
+"""The explorer server's rules (issue 27, docs/explorer.md): same-origin only, a
+time and size budget per request with the server answering meanwhile, and 422
+with the parameter named for every malformed request."""
+
+import socket
+import threading
+import time
+
+import pytest
+
+fastapi = pytest.importorskip("fastapi")
+from fastapi.testclient import TestClient  # noqa: E402
+
+from plausible.explorer import views  # noqa: E402
+from plausible.explorer.app import Budget, create_app, server_config  # noqa: E402
+
+LOCAL = "http://127.0.0.1:8765"
+
+
+@pytest.fixture(scope="module")
+def client():
+    return TestClient(create_app(port=8765), base_url=LOCAL)
+
+
+def post(client, route, body, **kw):
+    return client.post(f"/api/{route}", json=body, **kw)
+
+
+def test_foreign_host_and_origin_are_refused(client):
+    ok = {"model": "lambertian"}
+    assert post(client, "validate", ok).status_code == 200
+    assert post(client, "validate", ok, headers={"Origin": LOCAL}).status_code == 200
+    assert post(client, "validate", ok, headers={"Origin": "http://localhost:8765"}).status_code == 200
+    for origin in ("http://evil.example", "http://127.0.0.1:9999", "null", "https://127.0.0.1:8765"):
+        r = post(client, "validate", ok, headers={"Origin": origin})
+        assert r.status_code == 403 and "Origin" in r.json()["error"]
+    for host in ("evil.example", "evil.example:8765", "127.0.0.1:9999", "127.0.0.1.evil.example:8765"):
+        r = post(client, "validate", ok, headers={"Host": host})
+        assert r.status_code == 403 and "Host" in r.json()["error"]
+    assert client.get("/api/models", headers={"Host": "rebound.example:8765"}).status_code == 403
+
+
+@pytest.mark.parametrize("body,names", [
+    ({"model": "lambertian", "params": [1, 2]}, '"params"'),
+    ({"model": "lambertian", "params": "rd=0.5"}, '"params"'),
+    ({"model": "lambertian", "params": 3}, '"params"'),
+    ({"model": 7}, '"model"'),
+    ({"model": "lambertian", "theta_i": None}, "theta_i"),
+    ({"model": "lambertian", "theta_i": [30]}, "theta_i"),
+    ({"model": "lambertian", "theta_i": True}, "theta_i"),
+    ({"model": "lafortune", "params": {"lobes": "2,2,2,1e6,0.5;"}}, "lobes"),
+    ({"model": "ward", "params": {"alpha_x": True}}, "alpha_x"),
+    ({"model": "lambertian", "params": {"rd": [0.1, 0.2]}}, "'rd'"),
+    ({"model": "lambertian", "params": {"rd": "0.1,0.2,0.3,0.4"}}, "'rd'"),
+    ({"model": "pumped-up", "params": {"base": "[" * 6 + "lambertian" + "]" * 6}}, "nests more than"),
+    ({"model": "pumped-up", "params": {"base": "pumped-up:base=[" * 5 + "lambertian" + "]" * 5}}, "nests more than"),
+])
+def test_malformed_requests_get_422_naming_the_parameter(client, body, names):
+    r = post(client, "plane", body)
+    assert r.status_code == 422 and names in r.json()["error"]
+
+
+def test_a_body_over_the_size_budget_or_not_json_is_refused(client):
+    r = client.post("/api/validate", content=b'{"model": "lambertian", "params": {"rd": [' + b"0.5," * 30000
+                    + b'0.5]}}', headers={"Content-Type": "application/json"})
+    assert r.status_code == 413 and str(Budget().body_bytes) in r.json()["error"]
+    r = client.post("/api/validate", content=b"{not json", headers={"Content-Type": "application/json"})
+    assert r.status_code == 422 and "JSON" in r.json()["error"]
+
+
+def test_a_request_over_the_time_budget_is_stopped_and_the_server_keeps_answering(monkeypatch):
+    def spin(model):           # a view that never ends (pure Python, so it can be stopped)
+        while True:
+            pass
+
+    monkeypatch.setattr(views, "half_diff_slice", spin)
+    c = TestClient(create_app(budget=Budget(seconds=1.0)), base_url=LOCAL)
+    answers = {}
+
+    def slow():
+        answers["slice"] = post(c, "slice", {"model": "lambertian"})
+
+    th = threading.Thread(target=slow)
+    th.start()
+    time.sleep(0.3)
+    t0 = time.monotonic()
+    assert c.get("/api/models").status_code == 200          # answered while the slice computes
+    answers["models_s"] = time.monotonic() - t0
+    th.join(30)
+    r = answers["slice"]
+    assert r.status_code == 503 and "time budget of 1 s" in r.json()["error"]
+    # the worker was freed: the next computation is answered
+    assert post(c, "plane", {"model": "lambertian", "theta_i": 10}).status_code == 200
+    assert answers["models_s"] < 1.0
+
+
+def test_trickling_request_heads_are_cut_off():
+    import uvicorn
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    budget = Budget(header_seconds=0.5)
+    server = uvicorn.Server(server_config(create_app(port=port), "127.0.0.1", port, budget))
+    th = threading.Thread(target=server.run, daemon=True)
+    th.start()
+    try:
+        while not server.started:
+            time.sleep(0.05)
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+            sock.sendall(b"GET /api/models HTTP/1.1\r\nHost: 127.0.0.1\r\n")   # the head never ends
+            time.sleep(1.5)
+            assert sock.recv(100) == b""        # closed by the server
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+            sock.sendall(f"GET /api/models HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n".encode())
+            assert sock.recv(100).startswith(b"HTTP/1.1 200")
+    finally:
+        server.should_exit = True
+        th.join(10)

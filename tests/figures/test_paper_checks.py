@@ -1,0 +1,257 @@
+"""The checks the figures make of the papers' statements, fed known inputs:
+closed forms where they pass, and deliberately broken inputs where they must fail.
+Fast: no render, no albedo table (pure functions of arrays)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from plausible.figures import Context
+from plausible.figures.paper_neumann import (RATE_COS, controlled_checks, log_slope, mirror_convergence,
+                                              rate_checks)
+
+TH = np.linspace(0.0, 89.9, 30)
+
+
+def _ok(q):
+    """The verdict ``Context.measure`` gives a check's keyword arguments (a number
+    measured without a bound is no check: True)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        return Context(d).measure(**q).get("ok", True)
+
+
+# -- fig. 1: the rates --------------------------------------------------------------
+
+@pytest.mark.parametrize("p", [-1.0, -0.5, 0.0, 0.37])
+def test_log_slope_recovers_the_exponent_of_a_power_law(p):
+    c = np.array(RATE_COS)
+    assert log_slope(c, 3.0 * c ** p) == pytest.approx(p, abs=1e-12)
+
+
+def _curve(a0, a80):
+    return np.interp(TH, [0.0, 80.0, 89.9], [a0, a80, a80])
+
+
+def test_rate_checks_pass_on_the_rates_the_paper_implies_and_fail_on_others():
+    c = np.array(RATE_COS)
+    ct = rate_checks("Cook-Torrance (m = 0.1), G = 1", _curve(1.0, 1.0), TH, 0.01 / c)
+    assert all(_ok(q) for q in ct)
+    assert not all(_ok(q) for q in rate_checks("Cook-Torrance (m = 0.1), G = 1", _curve(1, 1), TH, 0.01 / c ** .5))
+    ward = rate_checks("Ward (m = 0.1)", _curve(1.0, 0.2), TH, 0.01 / np.sqrt(c))
+    assert all(_ok(q) for q in ward)
+    # a Ward curve that does not decrease first, or diverges like 1/cos, fails
+    assert not all(_ok(q) for q in rate_checks("Ward (m = 0.1)", _curve(1.0, 1.0), TH, 0.01 / np.sqrt(c)))
+    assert not all(_ok(q) for q in rate_checks("Ward (m = 0.1)", _curve(1.0, 0.2), TH, 0.01 / c))
+    vg = rate_checks("Cook-Torrance (m = 0.1), V-groove G (eq. 10)", _curve(1.0, 0.98), TH, np.full(3, 0.99))
+    assert all(_ok(q) for q in vg)
+    assert not all(_ok(q) for q in rate_checks("Cook-Torrance (m = 0.1), V-groove G (eq. 10)", _curve(1, 1), TH,
+                                               0.01 / c))
+    phong = rate_checks("Phong (n = 150)", _curve(1.0, 0.1) * np.where(TH > 89, 0.3, 1.0), TH, np.full(3, 0.03))
+    assert all(_ok(q) for q in phong)
+    assert not all(_ok(q) for q in rate_checks("Phong (n = 150)", _curve(1.0, 0.9), TH, np.full(3, 0.9)))
+
+
+# -- figs. 3-6: pumping ---------------------------------------------------------------
+
+def _geometric(a0, limit, r, k):
+    """a_k = limit - (limit - a0) r^k: a sequence with a known limit."""
+    return limit - (limit - a0) * r ** k
+
+
+def test_mirror_convergence_passes_a_sequence_tending_to_one_and_fails_one_that_stops():
+    base = np.linspace(1.0, 0.1, 30)
+    to_one = [_geometric(base, 1.0, 0.5, k) for k in (1, 2, 3)]
+    assert _ok(mirror_convergence(to_one))
+    stops = [_geometric(base, 0.8 + 0.2 * np.linspace(1, 0, 30), 0.2, k) for k in (1, 2, 3)]
+    assert not _ok(mirror_convergence(stops))
+
+
+def _controlled_inputs(model, limit_at_grazing, r, second_rise=None):
+    base = np.linspace(1.0, 0.1, 30)
+    limit = np.linspace(1.0, limit_at_grazing, 30)
+    levels = [_geometric(base, limit, r, k) for k in (1, 2, 3)]
+    if second_rise is not None:   # Blinn: the second pumping adds second_rise at grazing
+        levels = [levels[0], levels[0] + second_rise * np.linspace(0, 1, 30), levels[0] +
+                  second_rise * (1 + 1e-3) * np.linspace(0, 1, 30)]
+        base = levels[0] - 0.1 * np.sin(np.linspace(0, np.pi, 30))   # the first pumping adds up to 0.1
+    return base, levels, limit
+
+
+def test_controlled_checks_pass_on_a_process_converging_below_one():
+    """A geometric sequence toward a limit of 0.52 at grazing (fig. 5's, eq. 22's):
+    every check holds, and the Aitken extrapolation returns the limit (a closed form)."""
+    base, levels, limit = _controlled_inputs("Phong", 0.52, 0.3)
+    qs = controlled_checks("Phong", base, levels, [3.5, 3.5, 3.5], 3.5, product=levels[-1] + 0.2,
+                           maximum=levels[-1] + 0.2, limit=limit)
+    assert all(_ok(q) for q in qs), [q["quantity"] for q in qs if not _ok(q)]
+    aitken = next(q for q in qs if "Aitken" in q["quantity"])
+    assert aitken["measured"] == pytest.approx(0.52, abs=1e-9)
+
+
+@pytest.mark.parametrize("broken, words", [
+    ("to-one", "converges below 1"),             # the uncontrolled process: limit 1
+    ("outshines", "peak output radiance"),       # a level brighter than the base (the super-metal)
+    ("no-second", "worth pumping"),              # Phong that stops after one pumping
+    ("not-eq22", "eq. 22 is the limit"),         # converging to something else
+])
+def test_controlled_checks_fail_on_broken_inputs(broken, words):
+    base, levels, limit = _controlled_inputs("Phong", 1.0 if broken == "to-one" else 0.52, 0.3)
+    peaks = [3.5, 3.5, 4.8 if broken == "outshines" else 3.5]
+    if broken == "no-second":
+        levels = [levels[0], levels[0] + 1e-4, levels[0] + 1.5e-4]
+    if broken == "not-eq22":
+        limit = limit - 0.1
+    qs = controlled_checks("Phong", base, levels, peaks, 3.5, maximum=levels[-1] + 0.2, limit=limit)
+    bad = [q["quantity"] for q in qs if not _ok(q)]
+    assert any(words in q for q in bad), bad
+
+
+def test_blinn_check_fails_when_the_second_pumping_still_raises_the_albedo():
+    """Stepwise eq. 21 (the reading not followed) raises Blinn's albedo at 80 degrees
+    from 0.22 to 0.51 by the second pumping: the check must fail; 6e-4 (measured with
+    the reading followed) passes."""
+    base, levels, _ = _controlled_inputs("Blinn", 0.11, 0.3, second_rise=6e-4)
+    assert all(_ok(q) for q in controlled_checks("Blinn", base, levels, [1.05] * 3, 1.05,
+                                                  maximum=levels[-1] + 0.3))
+    base, levels, _ = _controlled_inputs("Blinn", 0.11, 0.3, second_rise=0.29)
+    bad = [q["quantity"] for q in controlled_checks("Blinn", base, levels, [1.05] * 3, 1.05) if not _ok(q)]
+    assert any("Blinn's albedo does not significantly increase" in q for q in bad), bad
+
+
+# -- the report's measurements ------------------------------------------------------
+
+def test_measure_bounds_booleans_and_numbers(tmp_path):
+    ctx = Context(tmp_path)
+    assert ctx.measure("a", 0.5, at_least=0.4)["ok"] and not ctx.measure("a", 0.3, at_least=0.4)["ok"]
+    assert not ctx.measure("a", 0.5, at_least=0.6, at_most=1.0)["ok"]
+    m = ctx.measure("b", True, expected=True)
+    assert m["ok"] is True and m["measured"] is True
+    assert ctx.measure("b", np.bool_(False), expected=True)["ok"] is False
+    with pytest.raises(ValueError, match="'expected' must be a number"):
+        ctx.measure("c", 1.0, expected=">= 0.5")
+    with pytest.raises(ValueError, match="boolean"):
+        ctx.measure("d", True, expected="yes")
+
+
+def test_report_writes_bounds_and_booleans_as_text(tmp_path):
+    from plausible.figures.report import write_index
+
+    ctx = Context(tmp_path)
+    ctx.measure("bounded", 0.5, at_least=0.25, at_most=1.0)
+    ctx.measure("flag", False, expected=True)
+    html = write_index(tmp_path, {"x": dict(title="x", status="ok", items=[],
+                                            measurements=ctx.measurements)}).read_text()
+    assert "&ge; 0.25, &le; 1" in html
+    assert "<td>no</td><td>yes</td>" in html and "DOES NOT HOLD" in html
+
+
+# -- fireflies ----------------------------------------------------------------------
+
+def test_hot_pixels_finds_injected_fireflies_and_not_image_features():
+    """The issue's definition (luminance > 4 x the 3x3 median + 0.5): a smooth image has
+    none; one and two injected fireflies are found; the four corners of a bright square
+    pass the luminance test (their 3x3 median is dark) but have three bright neighbours,
+    so they are not isolated."""
+    from plausible.figures.scenes import count_hot_pixels, hot_pixels
+
+    y, x = np.mgrid[0:40, 0:50]
+    img = np.repeat((0.2 + 0.01 * x + 0.005 * y)[..., None], 3, axis=-1)
+    assert count_hot_pixels(img) == 0
+    fire = img.copy()
+    fire[10, 10] = 20.0
+    assert count_hot_pixels(fire) == 1 and hot_pixels(fire)[10, 10]
+    fire[30, 40] = fire[30, 41] = 5.0          # two touching: 5 > 4 x 0.6 + 0.5
+    assert count_hot_pixels(fire) == 3
+    weak = img.copy()
+    weak[10, 10] = 4 * weak[10, 10, 0] + 0.4   # below the threshold
+    assert count_hot_pixels(weak) == 0
+    square = np.zeros((40, 40, 3)) + 0.05
+    square[10:20, 10:20] = 15.0
+    assert count_hot_pixels(square, isolated=False) == 4 and count_hot_pixels(square) == 0
+
+
+def test_lamp_has_the_intensity_of_the_point_light_it_replaces():
+    """A sphere of radius r and radiance L has intensity L pi r^2 (W/sr) in every direction."""
+    import math
+
+    from plausible.figures.scenes import lamp
+
+    d = lamp([1.0, 2.0, 3.0], 90.0, radius=2.0)
+    assert d["emitter"]["radiance"]["value"] * math.pi * 4.0 == pytest.approx(90.0, rel=1e-12)
+    assert d["center"] == [1.0, 2.0, 3.0] and d["radius"] == 2.0
+
+
+@pytest.mark.drjit
+def test_tilted_plane_furnace_shows_the_albedo_at_the_rim():
+    """A&S fig. 2's furnace away from the centre: a flat patch of nu = nv = 10 seen at
+    80 deg in the unit furnace reads the directional albedo there (0.539, 4 s.e.), and
+    not that of nu = nv = 100 (the check fails on the wrong model)."""
+    import math
+
+    pytest.importorskip("mitsuba")
+    import plausible
+    from plausible.analysis import albedo, direction
+    from plausible.figures import scenes as S
+    from plausible.figures.paper_as import as_bsdf, tilted_plane_furnace
+
+    mi = S.mitsuba()
+    img = S.render(mi, tilted_plane_furnace(mi, as_bsdf(10, 10, 1.0, 0.0), 80.0, 16, 64), seed=3)
+    px = img.mean(axis=-1).ravel()
+    got, se = px.mean(), px.std(ddof=1) / math.sqrt(px.size)
+    right = float(albedo(plausible.make("ashikhmin-shirley", nu=10, nv=10, rs=1.0, rd=0.0),
+                         direction(math.radians(80.0))))
+    wrong = float(albedo(plausible.make("ashikhmin-shirley", nu=100, nv=100, rs=1.0, rd=0.0),
+                         direction(math.radians(80.0))))
+    assert right == pytest.approx(0.539, abs=5e-4)
+    assert abs(got - right) <= 4 * se, (got, se, right)
+    assert abs(got - wrong) > 4 * se, (got, se, wrong)
+
+
+def test_report_lists_image_size_and_samples_only_for_renders(tmp_path):
+    from plausible.figures.report import write_index
+
+    figs = {"plot": dict(title="p", status="ok", items=[], params=dict(n=20), resolution=320, spp=128,
+                         renders=False),
+            "render": dict(title="r", status="ok", items=[], params=dict(n=5), resolution=320, spp=128,
+                           renders=True)}
+    html = write_index(tmp_path, figs).read_text()
+    plot, render = html.split("<h2 id='render'>")
+    assert "spp = 128" not in plot and "n = 20" in plot
+    assert "spp = 128" in render and "resolution = 320" in render
+
+
+def test_a_hot_pixel_counts_unless_it_is_hot_again_at_another_seed(tmp_path):
+    """Context.image's firefly check: a hot pixel whose neighbourhood, rendered again
+    (here: given), shows it hot again is a glint, not counted; one that vanishes is a
+    firefly and fails the check."""
+    pytest.importorskip("mitsuba")
+    img = np.full((20, 20, 3), 0.3)
+    img[5, 12] = 9.0
+    ctx = Context(tmp_path)
+
+    def glint(y0, x0, h, w):
+        return img[y0:y0 + h, x0:x0 + w]
+
+    def clean(y0, x0, h, w):
+        return np.full((h, w, 3), 0.3)
+
+    ok = ctx.image("a", img, rerender=glint)
+    assert ctx.measurements[-1]["ok"] is True and ctx.measurements[-1]["measured"] == 0
+    assert "as bright again" in ctx.measurements[-1]["note"]
+    ctx.image("b", img, rerender=clean)
+    assert ctx.measurements[-1]["ok"] is False and ctx.measurements[-1]["measured"] == 1
+    ctx.image("c", img)
+    assert ctx.measurements[-1]["measured"] == 1
+    assert ok.shape == img.shape
+
+
+def test_perceptual_checks_hold_when_the_perceptual_fit_wins_and_fail_otherwise():
+    from plausible.figures.paper_neumann import perceptual_checks
+
+    ls = {"albedo_max": 0.48, "perceptual": 5.18}
+    pc = {"albedo_max": 0.16, "perceptual": 4.74}   # docs/fitting.md's neumann-metal rows
+    assert all(_ok(q) for q in perceptual_checks(ls, pc))
+    assert not any(_ok(q) for q in perceptual_checks(pc, ls))
