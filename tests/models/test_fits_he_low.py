@@ -53,6 +53,7 @@ def test_every_he_fit_equals_bbms_nganhe_with_its_sums_converged():
     assert devs[-1][0] < 1e-5, devs[-3:]
 
 
+@pytest.mark.slow
 def test_he_fits_against_bbm_as_written():
     """bbm as written stops its series at the first channel's negligible term and after 64
     terms: that moves 43 of the 86 fits by more than 1e-5 at these pairs, at most 1.2 %
