@@ -47,3 +47,151 @@ def test_import_time(benchmark):
            beyond_numpy_s=beyond[2], numpy_s=sorted(r.get("numpy", 0.0) for r in runs)[2],
            scipy_stats="scipy.stats" in runs[0], reference_scipy_stats_s=ref[2], load=load())
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+# -- what varies parameters ----------------------------------------------------------------
+
+import resource  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import plausible  # noqa: E402
+from plausible import backend  # noqa: E402
+
+needs_drjit = pytest.mark.skipif(not backend.drjit_available(), reason="Dr.Jit LLVM backend unavailable")
+
+
+def cpu() -> float:
+    """CPU seconds of this process (all its threads) and of its finished children."""
+    me, ch = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + ch.ru_utime + ch.ru_stime
+
+
+def timed(fn):
+    """``(result, wall s, CPU s)`` of one call."""
+    t, c = time.perf_counter(), cpu()
+    out = fn()
+    return out, time.perf_counter() - t, cpu() - c
+
+
+#: (spec, parameter to vary, values): a new parameter set per value.
+VARIED = [("ashikhmin-shirley:nu=10:nv=100", "nu", (11.0, 13.5, 27.0, 55.5, 80.25)),
+          ("ward:alpha_x=0.1:alpha_y=0.1:rs=0.5:rd=0.2", "rs", (0.11, 0.23, 0.35, 0.47, 0.59)),
+          ("cook-torrance:m=0.2:rs=0.6", "m", (0.11, 0.17, 0.23, 0.29, 0.35))]
+
+
+@needs_drjit
+@pytest.mark.parametrize("spec,name,values", VARIED, ids=[v[0].split(":")[0] for v in VARIED])
+def test_new_parameter_sets_compile_nothing(benchmark, spec, name, values):
+    """``eval`` of 10^5 pairs on Dr.Jit at five parameter sets never used before
+    (the structure compiled once at the spec's own values): kernels compiled and
+    milliseconds per set; reference, same run: the same with the structure forced
+    to constants (one kernel per parameter set, as before issue 30).  The values
+    are offset by the clock, so Dr.Jit's disk cache cannot know them."""
+    rng = np.random.default_rng(3)
+    wi, wo = rng.normal(size=(2, 100_000, 3))
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    base = plausible.registry.make_from_spec(spec)
+    base.eval(wi, wo, backend="drjit")
+    st = backend.structure_of(base)
+    out = {}
+    for mode in ("data", "constants"):
+        off = 1.0 + (time.time_ns() % 10 ** 6) * 1e-9
+        models = [type(base)(**dict(base.params, **{name: v * off})) for v in values]
+        if mode == "constants":
+            backend._CONSTANTS.add(st)
+        try:
+            with backend.kernel_log() as log:
+                _, wall, _ = timed(lambda: [m.eval(wi, wo, backend="drjit") for m in models])
+        finally:
+            backend._CONSTANTS.discard(st)
+        out[mode] = dict(compiled=log["compiled"] + log["loaded"], ms_per_set=1e3 * wall / len(models))
+    record(benchmark, "issue-30", f"5 new parameter sets, eval 10^5 pairs ({spec.split(':')[0]})",
+           backend="drjit", op="params", n=len(values), compiled_data=out["data"]["compiled"],
+           compiled_constants=out["constants"]["compiled"], ms_per_set_data=out["data"]["ms_per_set"],
+           ms_per_set_constants=out["constants"]["ms_per_set"], load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+#: Mitsuba prb optimisation: (plugin dict, parameters optimised).  Ward's alpha_x
+#: is the reference: its step never recompiled.
+STEPS = [("ward rs, rd", dict(type="ward", alpha_x=0.2, alpha_y=0.2, rs=0.5, rd=0.3), {"rs": 0.3, "rd": 0.5}),
+         ("modified-phong kd, ks", dict(type="modified_phong", kd=0.4, ks=0.3, n=20), {"kd": 0.3, "ks": 0.2}),
+         ("ward alpha_x (reference)", dict(type="ward", alpha_x=0.2, alpha_y=0.2, rs=0.5, rd=0.3),
+          {"alpha_x": 0.3})]
+
+
+@needs_drjit
+@pytest.mark.parametrize("label,bsdf,start", STEPS, ids=[s[0].split(" (")[0].replace(" ", "") for s in STEPS])
+def test_mitsuba_optimisation_step_compiles_nothing(benchmark, mi, label, bsdf, start):
+    """``plausible.mitsuba.inverse.fit`` (Adam through ``prb``, 16x16, 2 spp): two
+    warm-up steps, then kernels compiled (or loaded from disk) and milliseconds
+    per step over 3 steps.  Before issue 30, a Python ``if`` on ``rs + rd``
+    (``kd + ks``) made each step's parameter values kernel constants."""
+    from plausible.mitsuba import inverse
+
+    scene = inverse.sphere_scene(bsdf, res=16, spp=2)
+    ref = mi.render(scene, seed=0, spp=2)
+    inverse.fit(scene, ref, start, iterations=2)
+    with backend.kernel_log() as log:
+        _, wall, _ = timed(lambda: inverse.fit(scene, ref, start, iterations=3))
+    record(benchmark, "issue-30", f"Mitsuba prb step: {label}", backend="mitsuba", op="step", n=3,
+           compiled_per_step=(log["compiled"] + log["loaded"]) / 3, ms_per_step=1e3 * wall / 3, load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+@needs_drjit
+@pytest.mark.parametrize("backend_name", ["auto", "numpy"])
+def test_check_quick_of_a_new_parameter_set(benchmark, backend_name):
+    """``check(quick=True)`` of Ashikhmin-Shirley at a parameter set not seen
+    before (after one check at other values: the kernels of the structure are
+    compiled); target 0.3 s.  Reference, same run: the NumPy backend."""
+    with plausible.use_backend(backend_name):
+        plausible.check(plausible.make("ashikhmin-shirley", nu=10, nv=100), quick=True)
+        off = (time.time_ns() % 10 ** 6) * 1e-7
+        m = plausible.make("ashikhmin-shirley", nu=12 + off, nv=90 - off, rs=0.07)
+        rep, wall, cpus = timed(lambda: plausible.check(m, quick=True))
+    record(benchmark, "issue-30", "check --quick, new parameter set (ashikhmin-shirley)", backend=backend_name,
+           op="check", n=1, wall_s=wall, cpu_s=cpus, passed=bool(rep.passed), load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+@needs_drjit
+@pytest.mark.parametrize("metric", ["l2-cos", "perceptual"])
+@pytest.mark.parametrize("backend_name", ["auto", "numpy"])
+def test_fit_as_to_cook_torrance(benchmark, metric, backend_name):
+    """``plausible fit ashikhmin-shirley --target cook-torrance:m=0.17:rs=0.6`` with
+    ``metric`` (targets: perceptual 10 s, l2-cos 2 s); wall and CPU seconds
+    (the CPU time is what a loaded machine does not inflate).  Reference,
+    same run: the NumPy backend."""
+    with plausible.use_backend(backend_name):
+        res, wall, cpus = timed(lambda: plausible.fit("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6",
+                                                      metric=metric))
+    record(benchmark, "issue-30", f"fit ashikhmin-shirley to cook-torrance m=0.17 rs=0.6, {metric}",
+           backend=backend_name, op="fit", n=1, wall_s=wall, cpu_s=cpus, evaluations=int(res.evaluations),
+           result=str({k: round(v, 4) for k, v in res.params.items() if isinstance(v, float)}), load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+def _cli(*args):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    exe = os.path.join(os.path.dirname(sys.executable), "plausible")
+    cmd = [exe] if os.path.exists(exe) else [sys.executable, "-m", "plausible.cli"]
+    return subprocess.run(cmd + list(args), env=env, capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("args", [("--materials", "--quick", "--json"), ("--all", "--quick", "--json")],
+                         ids=["materials-quick", "all-quick"])
+def test_check_command(benchmark, args):
+    """``plausible check --materials --quick`` (every published fit, 916; target
+    2 minutes) and ``plausible check --all --quick`` (every registered model on
+    its defaults and extremes; target 20 s), each a fresh process: wall seconds
+    and CPU seconds of the process and its workers."""
+    r, wall, cpus = timed(lambda: _cli("check", *args))
+    import json
+
+    n = len(json.loads(r.stdout)) if r.stdout.strip().startswith("[") else -1
+    record(benchmark, "issue-30", "plausible check " + " ".join(a for a in args if a != "--json"), backend="auto",
+           op="check", n=n, wall_s=wall, cpu_s=cpus, status=r.returncode, load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)

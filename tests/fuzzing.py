@@ -176,7 +176,7 @@ def weight_bound(m, wi):
     if name in ("reciprocal-blinn", "blinn"):
         return 8 * math.pi * _cmax(p["ks"]) * PH.blinn_norm(NP, n) / (n + 1) / (ci if name == "blinn" else 1.0)
     if name == "modified-phong":
-        ps = type(m).spec_probability(q)
+        ps = type(m).spec_probability(NP, q)
         return _mix(ps, _cmax(p["ks"]) * (n + 2) / (n + 1) * one, _cmax(p["kd"]) * one)
     if name == "neumann-metal":
         return 2 * math.pi * p["c"] / (n + 1) * one
@@ -184,7 +184,7 @@ def weight_bound(m, wi):
         return 2.0 * one if p["geometry"] == "vgroove" else 2.0 / ci ** 2
     if name == "ward":
         spec = {"ward": 1 / np.sqrt(ci), "duer": 1 / ci, "balanced": 2.0 * one}[p["variant"]]
-        return _mix(type(m).spec_probability(q), _cmax(p["rs"]) * spec, _cmax(p["rd"]) * one)
+        return _mix(type(m).spec_probability(NP, q), _cmax(p["rs"]) * spec, _cmax(p["rd"]) * one)
     if name == "schlick":
         ps = m._spec_probability(NP, wi.T, q)
         # azimuth="sqrt": f has sqrt(A) where the sampler has A, A in [p, 1/p]: 1/sqrt(p) more

@@ -1,10 +1,12 @@
 """The backend switch (:mod:`plausible.backend`): the rule that picks NumPy or
 Dr.Jit, the same numbers on both over the registry, and a NumPy-only install."""
 
+import math
 import os
 import subprocess
 import sys
 import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -80,7 +82,9 @@ def test_auto_picks_drjit_for_large_batches_only():
     assert backend.choose(backend.AUTO_MIN_ROWS, m) == "numpy"
     assert backend.choose(backend.AUTO_MIN_NEW, m) == "drjit"
     assert backend.choose(backend.AUTO_MIN_ROWS, m) == "drjit"
-    assert backend.choose(backend.AUTO_MIN_ROWS, plausible.make("ashikhmin-shirley", nu=12.345, nv=67.9)) == "numpy"
+    # new parameter values of a compiled structure reuse its kernel; a new structure does not
+    assert backend.choose(backend.AUTO_MIN_ROWS, plausible.make("ashikhmin-shirley", nu=12.345, nv=67.9)) == "drjit"
+    assert backend.choose(backend.AUTO_MIN_ROWS, plausible.make("ashikhmin-shirley", rs=[0.1, 0.2, 0.3])) == "numpy"
     with backend.use("numpy"):
         assert backend.choose(10 ** 7) == "numpy"
     with backend.use("drjit"):
@@ -195,3 +199,99 @@ def test_import_plausible_loads_no_heavy_module():
                            text=True, env=env, timeout=120)
         assert r.returncode == 0, r.stderr
         assert set(r.stdout.split()) == expect
+
+
+# -- parameters as kernel data (plausible.kernel_params) -----------------------------------
+
+#: Pairs of models of one structure with different parameter values.
+SAME_STRUCTURE = [
+    ("ashikhmin-shirley:nu=10:nv=100", "ashikhmin-shirley:nu=20:nv=20:rs=0.3:rd=0.1"),
+    ("ward:alpha_x=0.1:rs=0.5:rd=0.2:variant=duer", "ward:alpha_x=0.3:alpha_y=0.05:rs=0.1:rd=0.6:variant=duer"),
+    ("modified-phong:kd=0.2,0.3,0.4:ks=0.3:n=30", "modified-phong:kd=0.5,0.1,0.2:ks=0.2:n=7"),
+    ("cook-torrance:m=0.2", "cook-torrance:m=0.35:rs=0.7"),
+    ("material:alum-bronze@ngan2005/cook-torrance", "material:alumina-oxide@ngan2005/cook-torrance"),
+]
+
+
+def _spec(spec, jitter=0.0):
+    m = plausible.registry.make_from_spec(spec)
+    if not jitter or not m.params:
+        return m
+    # values never used before in any process (Dr.Jit's disk cache would know them)
+    jitter *= 1.0 + (time.time_ns() % 10 ** 6) * 1e-6
+    return type(m)(**{k: (v * (1.0 - jitter) if isinstance(v, float) else v) for k, v in m.params.items()})
+
+
+def _dirs(seed):
+    rng = np.random.default_rng(seed)
+    return random_upper(rng, 200), random_upper(rng, 200), rng.random((200, 3))
+
+
+def _all_kernels(m, seed):
+    wi, wo, u = _dirs(seed)
+    with plausible.use_backend("drjit"):
+        out = [m.eval(wi, wo), m.eval(wi[0], wo), m.pdf(wi, wo), *m.sample(wi, u)]
+        out.append(plausible.albedo(m, [0.6, 0.0, 0.8], tol=1e-3).value)
+    return out
+
+
+def test_structure_keys_separate_structure_from_data():
+    s = backend.structure_of
+    assert s(_spec(SAME_STRUCTURE[1][0])) == s(_spec(SAME_STRUCTURE[1][1]))
+    assert s(plausible.make("ward")) != s(plausible.make("ward", variant="balanced"))      # a choice
+    assert s(plausible.make("ward")) != s(plausible.make("ward", rs=[1.0, 0.5, 0.2]))      # channels
+    assert s(plausible.make("reciprocal-phong")) != s(plausible.make("reciprocal-blinn"))  # the class
+    assert s(plausible.make("pumped-up", times=1)) != s(plausible.make("pumped-up", times=2))  # an integer
+
+
+@needs_drjit
+@pytest.mark.parametrize("a,b", SAME_STRUCTURE, ids=[x.split(":")[0] + "-" + x.split(":")[1][:12]
+                                                      for x, _ in SAME_STRUCTURE])
+def test_new_parameter_values_compile_nothing_and_agree_with_numpy(a, b, rng):
+    """Every Dr.Jit kernel (eval, eval with one wi, pdf, sample, the albedo's
+    quadrature) compiled for ``a`` serves ``b``: the kernel history shows no
+    compilation and no disk-cache load, and ``b`` agrees with NumPy as in
+    :func:`test_numpy_and_drjit_front_ends_agree`.  The same probe counts
+    compilations when the structure is forced to constants (so it can fail)."""
+    _all_kernels(_spec(a), 0)
+    mb = _spec(b, jitter=rng.uniform(1e-6, 1e-3))
+    with backend.kernel_log() as log:
+        got = _all_kernels(mb, 1)
+    assert log["launched"] >= 5 and log["compiled"] == 0 and log["loaded"] == 0, log
+    wi, wo, u = _dirs(1)
+    ref = [mb.eval(wi, wo, backend="numpy"), mb.eval(wi[0], wo, backend="numpy"), mb.pdf(wi, wo, backend="numpy")]
+    for g, r in zip(got, ref):
+        assert_rel(g, r, 1e-12)
+    s = mb.sample(wi, u, backend="numpy")
+    np.testing.assert_allclose(got[3], s.wo, rtol=0, atol=1e-12)
+    assert_rel(got[4], s.weight, 1e-10)
+    assert_rel(got[5], s.pdf, 1e-10)
+    mc = _spec(b if "material" not in b else SAME_STRUCTURE[3][1], jitter=rng.uniform(1e-6, 1e-3))
+    backend._CONSTANTS.add(backend.structure_of(mc))
+    try:
+        with backend.kernel_log() as log:
+            _all_kernels(mc, 2)
+        assert log["compiled"] + log["loaded"] >= 1, log
+    finally:
+        backend._CONSTANTS.discard(backend.structure_of(mc))
+
+
+class _MathHooks(BxDF):
+    """A model whose hook takes ``math.exp`` of a parameter (not array-safe)."""
+
+    PARAMS = (plausible.bxdf.Param("a", 0.5, 0.0, 1.0),)
+
+    def _f(self, ops, wi, wo, p):
+        return ops.where(wo[2] > 0, math.exp(-p.a) * wo[2], 0.0)
+
+
+@needs_drjit
+def test_a_hook_that_needs_float_parameters_runs_with_constants(rng):
+    """Parameters as data fail for it; the backend runs its structure with
+    constants (on Dr.Jit still, not NumPy) and gets NumPy's numbers."""
+    m = _MathHooks(a=0.25)
+    wi, wo = random_upper(rng, 50), random_upper(rng, 50)
+    got = m.eval(wi, wo, backend="drjit")
+    assert_rel(got, np.exp(-0.25) * wo[:, 2], 1e-15)
+    assert backend.structure_of(m) in backend._CONSTANTS and m not in backend._NUMPY_ONLY
+    assert backend.kernel_key(m)[0] == "constants"

@@ -10,7 +10,10 @@ one of two backends of the same formulas:
   hooks are traced once per call into one LLVM kernel (float64, all cores),
   compiled on first use and then taken from Dr.Jit's kernel cache (in memory,
   and on disk in ``~/.drjit``) whenever the formula's shape and constants are
-  the same (parameters are constants of the kernel; directions are not).
+  the same.  Parameters enter as kernel data, not constants
+  (:mod:`plausible.kernel_params`): one kernel per model *structure* serves
+  every parameter value; a structure whose hooks need float parameters runs
+  with them as constants (one kernel per parameter set).
 
 The rule (see ``docs/backends.md``):
 
@@ -20,7 +23,7 @@ The rule (see ``docs/backends.md``):
 2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
    and the call has at least :data:`AUTO_MIN_ROWS` direction pairs
    (:data:`AUTO_MIN_NODES` quadrature nodes; :data:`AUTO_MIN_NEW` for a model
-   and parameter set not yet compiled in this process; below that, tracing and
+   structure not yet compiled in this process; below that, tracing and
    compiling cost more than NumPy's arithmetic), NumPy otherwise;
 3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
 4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
@@ -55,17 +58,21 @@ AUTO_MIN_ROWS = 1 << 15
 #: The same for quadrature (:mod:`plausible.analysis.albedo`): its kernel does
 #: not depend on the grid or the incidence, so it is compiled once per model.
 AUTO_MIN_NODES = 1 << 14
-#: The thresholds above hold once a model (its class and parameters) has run on
-#: Dr.Jit in this process; before that ``auto`` asks for this many, where NumPy
-#: takes longer than compiling a kernel (a fit's objective, which makes a new
-#: parameter set at every step, so stays on NumPy for its small batches).
+#: The thresholds above hold once a model structure (:func:`kernel_key`) has run
+#: on Dr.Jit in this process; before that ``auto`` asks for this many, where NumPy
+#: takes longer than compiling a kernel.
 AUTO_MIN_NEW = 1 << 18
 
 _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
-#: ``(kernel, class, repr)`` of the models ``auto`` has sent to Dr.Jit (compiled).
+#: ``(kernel, kernel_key(model))`` of the models ``auto`` has sent to Dr.Jit (compiled).
 _TRACED: set = set()
 #: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
 _NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
+#: Structure keys (:func:`plausible.kernel_params.structure`) whose hooks failed
+#: with their parameters as kernel data: they run with constants from then on.
+_CONSTANTS: set = set()
+#: Whether the Dr.Jit call in progress passes parameters as data (set by :func:`run`).
+_AS_DATA: contextvars.ContextVar = contextvars.ContextVar("plausible_params_as_data", default=True)
 
 
 def _checked(name, source: str) -> str:
@@ -135,31 +142,100 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
                              f"its LLVM backend is not available; install the 'render' extra "
                              f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
         return "drjit"
-    if model is not None and (kernel, type(model), repr(model)) not in _TRACED:
+    key = None if model is None else (kernel, kernel_key(model))
+    if key is not None and key not in _TRACED:
         min_rows = max(min_rows, AUTO_MIN_NEW)
     if rows >= min_rows and drjit_available():
-        if model is not None:
-            _TRACED.add((kernel, type(model), repr(model)))
+        if key is not None:
+            _TRACED.add(key)
         return "drjit"
     return "numpy"
 
 
-def run(model, kind: str, numpy_fn, drjit_fn):
-    """``drjit_fn()``; if the model's hooks fail on Dr.Jit arrays, remember the model
-    as NumPy-only and return ``numpy_fn()``."""
+def structure_of(model):
+    """:func:`plausible.kernel_params.structure` of ``model``; None for an object
+    that is not a model of this library (it has no ``_structure``)."""
+    fn = getattr(model, "_structure", None)
+    if fn is None:
+        return None
     try:
-        return drjit_fn()
-    except _NotJit:
-        pass
-    except (TypeError, AttributeError, ValueError, RuntimeError, IndexError):
-        # a hook that calls NumPy on Dr.Jit arrays, or uses Python ``if`` on them
-        pass
+        return fn()
+    except Exception:  # noqa: BLE001 - a model whose parameters do not describe it: no shared kernel
+        return None
+
+
+def kernel_key(model):
+    """What the compiled kernels of ``model`` depend on: its structure when its
+    parameters enter as data, else its class and every parameter value."""
+    st = structure_of(model)
+    if st is not None and st not in _CONSTANTS:
+        return ("data", st)
+    return ("constants", type(model), repr(model))
+
+
+def run(model, kind: str, numpy_fn, drjit_fn):
+    """``drjit_fn()`` with the parameters as kernel data; if the hooks fail that
+    way, again with them as constants (and the structure is remembered: it runs
+    with constants from then on); if they fail on Dr.Jit arrays at all, remember
+    the model as NumPy-only and return ``numpy_fn()``."""
+    st = structure_of(model)
+    for data in ((True, False) if st is not None and st not in _CONSTANTS else (False,)):
+        token = _AS_DATA.set(data)
+        try:
+            return drjit_fn()
+        except _NotJit:
+            pass
+        except (TypeError, AttributeError, ValueError, RuntimeError, IndexError):
+            # a hook that calls NumPy or ``math`` on Dr.Jit arrays, or ``float()`` of one
+            pass
+        finally:
+            _AS_DATA.reset(token)
+        if data:
+            _CONSTANTS.add(st)
     _NUMPY_ONLY.add(model)
     return numpy_fn()
 
 
 class _NotJit(Exception):
     """A hook returned something that is not a Dr.Jit array or a number."""
+
+
+@contextlib.contextmanager
+def kernel_log():
+    """Count the Dr.Jit kernels launched inside the block (Dr.Jit's kernel
+    history).  Yields a dict filled on exit: ``launched`` (traced kernels run),
+    ``compiled`` (neither in Dr.Jit's in-memory cache nor on disk: LLVM
+    compiled them), ``loaded`` (from the on-disk cache), ``seconds`` (their
+    compile or load time).  Kernels from other threads in that time count too.
+
+    >>> from plausible import backend
+    >>> import plausible
+    >>> m = plausible.make("ward", alpha_x=0.2)
+    >>> _ = m.eval([0, 0, 1], [[0.6, 0, 0.8]], backend="drjit")
+    >>> with backend.kernel_log() as log:
+    ...     _ = plausible.make("ward", alpha_x=0.3).eval([0, 0, 1], [[0.6, 0, 0.8]], backend="drjit")
+    >>> log["compiled"], log["loaded"]
+    (0, 0)
+    """
+    import drjit as dr
+
+    out = dict(launched=0, compiled=0, loaded=0, seconds=0.0)
+    was = dr.flag(dr.JitFlag.KernelHistory)
+    dr.kernel_history()          # drop what came before
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        yield out
+    finally:
+        hist = dr.kernel_history()
+        dr.set_flag(dr.JitFlag.KernelHistory, was)
+        for e in hist:
+            if e.get("type") != dr.KernelType.JIT:
+                continue
+            out["launched"] += 1
+            # a kernel loaded from disk reads cache_hit 1 and cache_disk 1
+            if e.get("cache_disk") or not e.get("cache_hit"):
+                out["loaded" if e.get("cache_disk") else "compiled"] += 1
+                out["seconds"] += (e.get("codegen_time", 0.0) + e.get("backend_time", 0.0)) * 1e-3
 
 
 # -- Dr.Jit evaluation of the hooks ------------------------------------------------------
@@ -201,16 +277,10 @@ class _Lanes:
             return x
         return self.dr.gather(self.Float64, x, self.row)
 
-    def params(self, p):
-        """``p`` with each channel array read per lane (channels as lanes)."""
-        if self.reps == 1:
-            return p
-        vals = {}
-        for k, v in vars(p).items():
-            if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == self.reps:
-                v = self.dr.gather(self.Float64, self.Float64(v.astype(np.float64)), self.chan)
-            vals[k] = v
-        return type(p)(**vals)
+    def view(self, model):
+        """``model`` with its parameters as this block's kernel inputs (see
+        :func:`kernel_view`)."""
+        return kernel_view(model, self.dr, self.Float64, self.chan, self.reps)
 
     def numpy(self, x, lanes: int) -> np.ndarray:
         """A hook's result as a NumPy array of ``lanes`` values."""
@@ -224,6 +294,63 @@ class _Lanes:
         if a.size != lanes:
             raise _NotJit(f"{a.size} values for {lanes} lanes")
         return a
+
+
+def kernel_view(model, dr, F, chan, reps: int):
+    """The copy of ``model`` the Dr.Jit hooks run on (:meth:`plausible.bxdf.BxDF._kernel_view`):
+    a channel array of ``reps`` values is read per lane (lane channel ``chan``), and
+    with parameters as data (:mod:`plausible.kernel_params`; see :func:`run`) a float
+    becomes an opaque kernel input and any other float array a kernel input array."""
+    data = _AS_DATA.get()
+
+    def convert(v):
+        if isinstance(v, np.ndarray):
+            if reps > 1 and v.size == reps:
+                return dr.gather(F, F(np.ascontiguousarray(v, dtype=np.float64).ravel()), chan)
+            if data and v.size == 1:
+                return dr.opaque(F, float(v.reshape(-1)[0]))
+            return v
+        return dr.opaque(F, float(v)) if data else v
+
+    return model._kernel_view(convert)
+
+
+class PairKernel:
+    """``f`` of many models at fixed direction pairs on Dr.Jit: the pairs enter
+    once (unit ``(n, 3)`` arrays; the caller validates and normalises them), and
+    each call traces ``model._f`` with the model's parameters as kernel data, so
+    every model of one structure runs the same compiled kernel (a fit's
+    objective, a parameter sweep).  ``kernel(model)`` is ``model.eval(wi, wo)``:
+    ``(n,)`` or ``(n, channels)``; a model whose hooks do not run on Dr.Jit
+    gets NumPy's ``model.eval`` (the rule of :func:`run`)."""
+
+    def __init__(self, wi: np.ndarray, wo: np.ndarray):
+        self.wi = np.ascontiguousarray(wi, dtype=np.float64).reshape(-1, 3)
+        self.wo = np.ascontiguousarray(wo, dtype=np.float64).reshape(-1, 3)
+        if self.wi.shape != self.wo.shape:
+            raise ValueError(f"PairKernel: wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
+        self.n = len(self.wi)
+        self._lanes = {}
+
+    def _block(self, reps):
+        if reps not in self._lanes:
+            L = _Lanes(self.n, reps)
+            wi, wo = L.vectors(self.wi), L.vectors(self.wo)
+            L.dr.eval(*wi, *wo)
+            self._lanes[reps] = (L, wi, wo)
+        return self._lanes[reps]
+
+    def _jit(self, model):
+        c = model.channels or 1
+        L, wi, wo = self._block(c)
+        v = L.view(model)
+        f = v._f(L.ops, wi, wo, v.p)
+        return L.numpy(f, self.n * c).reshape((self.n, c) if model.channels else (self.n,))
+
+    def __call__(self, model) -> np.ndarray:
+        if model in _NUMPY_ONLY:
+            return model.eval(self.wi, self.wo, backend="numpy")
+        return run(model, "eval", lambda: model.eval(self.wi, self.wo, backend="numpy"), lambda: self._jit(model))
 
 
 def _is_jit(x) -> bool:
@@ -245,7 +372,8 @@ def eval_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarra
     n = int(np.prod(shape))
     c = model.channels or 1
     L = _Lanes(n, c)
-    f = model._f(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), L.params(model.p))
+    v = L.view(model)
+    f = v._f(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), v.p)
     out = L.numpy(f, n * c)
     return out.reshape(shape + ((model.channels,) if model.channels else ()))
 
@@ -254,7 +382,8 @@ def pdf_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarray
     """``model._pdf`` on Dr.Jit (as :func:`eval_block`; no channel axis)."""
     n = int(np.prod(shape))
     L = _Lanes(n)
-    v = model._pdf(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), model.q)
+    m = L.view(model)
+    v = m._pdf(L.ops, L.vectors(_rows(wi, shape)), L.vectors(_rows(wo, shape)), m.q)
     return L.numpy(v, n).reshape(shape)
 
 
@@ -268,7 +397,8 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
     dr, ops = L.dr, L.ops
     wi_c = L.vectors(_rows(wi, shape))
     u_c = L.vectors(_rows(u, shape))
-    wo_c = model._sample(ops, wi_c, u_c, model.q)
+    mv = L.view(model)
+    wo_c = mv._sample(ops, wi_c, u_c, mv.q)
     wo_c = tuple(x if _is_jit(x) else L.Float64(float(x)) for x in wo_c)
     if not all(_is_jit(x) for x in wo_c):
         raise _NotJit("sample")
@@ -278,7 +408,7 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
     den = dr.select(pos, nrm, 1.0)
     x, y, z = (dr.select(pos, x / den, 0.0), dr.select(pos, y / den, 0.0), dr.select(pos, z / den, -1.0))
     wo_c = (x, y, z)
-    pdf = model._pdf(ops, wi_c, wo_c, model.q)
+    pdf = mv._pdf(ops, wi_c, wo_c, mv.q)
     ok = (pdf > 1e-250) & (z > horizon) & (wi_c[2] > horizon)
     cos_over_pdf = dr.select(ok, z / dr.select(ok, pdf, 1.0), 0.0)
     pdf = dr.select(ok, pdf, 0.0)
@@ -288,12 +418,13 @@ def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: fl
         C = _Lanes(n, c)
         wo_l = tuple(C.gather_rows(v) for v in (x, y, z))
         wi_l = C.vectors(_rows(wi, shape))
-        f = model._f(ops, wi_l, wo_l, C.params(model.p))
+        cv = C.view(model)
+        f = cv._f(ops, wi_l, wo_l, cv.p)
         r = C.gather_rows(cos_over_pdf)
-        okc = C.gather_rows(dr.select(ok, 1.0, 0.0)) > 0.5
+        okc = C.gather_rows(dr.select(ok, L.Float64(1.0), L.Float64(0.0))) > 0.5
         weight = L.numpy(dr.select(okc, f * r, 0.0), n * c).reshape(shape + (c,))
     else:
-        f = model._f(ops, wi_c, wo_c, model.p)
+        f = mv._f(ops, wi_c, wo_c, mv.p)
         weight = L.numpy(dr.select(ok, f * cos_over_pdf, 0.0), n).reshape(shape)
     wo = np.stack([L.numpy(v, n) for v in wo_c], axis=-1).reshape(shape + (3,))
     return wo, weight, L.numpy(pdf, n).reshape(shape)
@@ -366,7 +497,11 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     cc = dr.opaque(U, c)
 
     def table(x):
-        return F(np.ascontiguousarray(x, dtype=np.float64).ravel())
+        # a single value as an opaque scalar: a one-element array made from NumPy
+        # memory enters the kernel with the alignment of its address, which varies,
+        # and so would the kernel (two variants to compile)
+        a = np.ascontiguousarray(x, dtype=np.float64).ravel()
+        return dr.opaque(F, float(a[0])) if a.size == 1 else F(a)
 
     cp, sp, wp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi), phi_w))
     wi = tuple(dr.gather(F, table(wis[:, k]), a) for k in range(3))
@@ -381,18 +516,11 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
         wo = tuple(2.0 * d * hk - wk for hk, wk in zip(h, wi))
         wt = dr.gather(F, table(theta_w), ti) * tm * st * (4.0 * d)
         ct = wo[2]
+    mv = kernel_view(model, dr, F, chan, c)
     if kind == "f":
-        p = model.p
-        if model.channels:
-            vals = {}
-            for k, v in vars(p).items():
-                if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == c:
-                    v = dr.gather(F, table(v), chan)
-                vals[k] = v
-            p = type(p)(**vals)
-        g = model._f(ops, wi, wo, p) * ct
+        g = mv._f(ops, wi, wo, mv.p) * ct
     else:
-        g = model._pdf(ops, wi, wo, model.q)
+        g = mv._pdf(ops, wi, wo, mv.q)
     if not (_is_jit(g) or isinstance(g, (int, float))):
         raise _NotJit(type(g).__name__)
     if tmax is not None:    # the contract's zero below the horizon (rounding at the edge s = 1)
@@ -407,5 +535,5 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     return np.asarray(total.numpy(), dtype=np.float64)
 
 
-__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "choose", "drjit_available",
-           "grid_sums", "requested", "use"]
+__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "PairKernel", "choose", "drjit_available",
+           "grid_sums", "kernel_key", "kernel_log", "kernel_view", "requested", "run", "structure_of", "use"]

@@ -30,13 +30,14 @@ channel mean (sampling probabilities are scalars).
 
 from __future__ import annotations
 
+import copy
 from types import SimpleNamespace
 from typing import ClassVar, NamedTuple
 
 import numpy as np
 
 from . import backend as _backend
-from . import vec
+from . import kernel_params, vec
 from .ops import NP
 from .params import Param
 from .text import fmt
@@ -360,6 +361,21 @@ class BxDF:
         their grids toward these); the default is the mirror direction.
         """
         return [np.array([-wi[0], -wi[1], wi[2]])]
+
+    # -- parameters as kernel data (plausible.kernel_params) ------------------------
+    def _kernel_view(self, convert):
+        """A shallow copy whose data parameters (the floats and channel arrays of
+        ``p`` and ``q``) went through ``convert``; a model holding other models or
+        parameter-derived state overrides it to convert those too."""
+        out = copy.copy(self)
+        out.p = kernel_params.convert_namespace(self.p, convert)
+        out.q = kernel_params.convert_namespace(self.q, convert)
+        return out
+
+    def _structure(self):
+        """What the traced kernel depends on besides data
+        (:func:`plausible.kernel_params.default_structure`)."""
+        return kernel_params.default_structure(self)
 
     # -- the NumPy contract --------------------------------------------------------
     @property

@@ -252,7 +252,18 @@ def eval_cmd(model, params, wi, wo, as_json):
 @click.option("--python", "python_obj", metavar="MODULE:NAME",
               help="A callable f(wi, wo) (optional .pdf and .sample), an object with eval/pdf/sample, "
                    "or a mitsuba.BSDF, importable as package.module:name.")
-def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id, python_obj):
+@click.option("--materials", "all_materials", is_flag=True,
+              help="Check every published MERL fit (reciprocity, largest albedo); see docs/materials.md.")
+@click.option("--fit", "fit_keys", multiple=True, metavar="FIT",
+              help="With --materials: only this fit set, e.g. ngan2005/ward (repeatable).")
+@click.option("--material", "material_names", multiple=True, metavar="NAME",
+              help="With --materials: only this material, e.g. alum-bronze (repeatable).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), metavar="DIR",
+              help="With --materials: write materials-table.md/.csv (and materials.md's summary) here.")
+@click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
+              help="With --materials: worker processes (default: the usable cores, at most 2).")
+def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
+          python_obj, all_materials, fit_keys, material_names, out_dir, jobs):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
@@ -264,12 +275,18 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     summary line ends the output, and the status is 1 when a model fails a
     property it claims.  --json: non-applicable checks have "passed" and
     "figure" null, and "counts" tallies passed, failed and not applicable.
+    With --materials: every published fit (or those of --fit, --material) as
+    one table, or a JSON list of reports; the status is 1 when a fit gains
+    energy or is not reciprocal.
     """
     import json
 
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
+    if all_materials or fit_keys or material_names or out_dir or jobs:
+        return _check_materials(all_materials, fit_keys, material_names, out_dir, jobs, quick, as_json,
+                                model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
     foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
     if not model and not all_models and foreign is None:
         _fail("give a MODEL, --all, --mitsuba, --mitsuba-xml or --python")
@@ -317,6 +334,64 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
                        f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
                        f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
     sys.exit(0 if all(verdicts) else 1)
+
+
+def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_json, other):
+    """``check --materials``: :func:`plausible.analysis.materials.check_fits` as a table or JSON."""
+    import json
+
+    from .analysis import materials as M
+    from .library import fit_set, materials, suggest
+
+    if not all_materials:
+        _fail("--fit, --material, --out and --jobs go with --materials")
+    if other:
+        _fail("--materials checks the published fits; it takes no MODEL, -p, --all, --mitsuba, "
+              "--mitsuba-xml or --python")
+    try:
+        sets = [fit_set(k) for k in fit_keys]
+    except ValueError as e:
+        _fail(str(e))
+    for fs in sets:
+        if not fs.built:
+            _fail(f"--fit {fs.key} cannot be loaded: {fs.reason}")
+    keys = [fs.key for fs in sets] or None
+    names = list(names) or None
+    known = materials()
+    for n in names or ():
+        if n not in known:
+            _fail(f"--material: unknown material {n!r}{suggest(n, list(known))}")
+    work = M.work_list(keys, names)
+    if not work:
+        _fail(f"no fit set {'of ' + ', '.join(keys) + ' ' if keys else ''}has the material(s) {', '.join(names)}")
+    tick = silent if as_json else _bar()
+    t = tick(len(work), "checking published fits")
+    rows = M.check_fits(keys, names, quick=quick, jobs=jobs or M.default_jobs(), progress=t)
+    bad = [r for r in rows if r.gains_energy or not r.reciprocal]
+    if out_dir:
+        written = M.write_tables(rows, out_dir)
+    if as_json:
+        click.echo(json.dumps([r.to_dict() for r in rows], indent=1))
+    else:
+        tab = Table(title="published fits", title_justify="left")
+        for c in ("fit", "fits", "gain energy", "largest albedo (material, angle)", "median largest albedo",
+                  "largest asymmetry"):
+            tab.add_column(c, overflow="fold")
+        for x in M.summary(rows):
+            style = "red" if x["gain"] else "green"
+            tab.add_row(escape(x["fit"]), str(x["n"]), f"[{style}]{x['gain']}[/{style}]",
+                        escape(f"{x['worst_albedo']:.4f} ({x['worst']}, {x['worst_theta']:g}°)"),
+                        f"{x['median']:.4f}", f"{x['asymmetry']:.1e}")
+        console.print(tab)
+        for r in bad:
+            what = f"gains energy: largest albedo {r.max_albedo:.4f} at {r.theta_deg:g}° ({r.channel})" \
+                if r.gains_energy else f"not reciprocal: asymmetry {r.asymmetry:.1e}"
+            console.print(f"[red]{escape(r.material)}@{escape(r.fit)}[/red] {escape(what)}")
+        click.echo(f"{len(rows)} fits of {len({r.fit for r in rows})} fit sets checked"
+                   f"{' (quick)' if quick else ''}: {len(rows) - len(bad)} plausible, {len(bad)} not")
+        if out_dir:
+            click.echo("wrote " + ", ".join(str(p) for p in written))
+    sys.exit(1 if bad else 0)
 
 
 def _claim_line(rep, info) -> str:

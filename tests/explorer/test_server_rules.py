@@ -94,14 +94,14 @@ def test_a_request_over_the_time_budget_is_stopped_and_the_server_keeps_answerin
     assert answers["models_s"] < 1.0
 
 
-def test_trickling_request_heads_are_cut_off():
+def test_trickling_request_heads_and_bodies_are_cut_off():
     import uvicorn
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    budget = Budget(header_seconds=0.5)
-    server = uvicorn.Server(server_config(create_app(port=port), "127.0.0.1", port, budget))
+    budget = Budget(header_seconds=0.5, body_seconds=0.5)
+    server = uvicorn.Server(server_config(create_app(port=port, budget=budget), "127.0.0.1", port, budget))
     th = threading.Thread(target=server.run, daemon=True)
     th.start()
     try:
@@ -111,6 +111,11 @@ def test_trickling_request_heads_are_cut_off():
             sock.sendall(b"GET /api/models HTTP/1.1\r\nHost: 127.0.0.1\r\n")   # the head never ends
             time.sleep(1.5)
             assert sock.recv(100) == b""        # closed by the server
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+            sock.sendall(f"POST /api/validate HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nContent-Type: "
+                         f"application/json\r\nContent-Length: 100\r\n\r\n{{\"model\": ".encode())
+            time.sleep(1.5)                     # the rest of the body never comes
+            assert sock.recv(100).startswith(b"HTTP/1.1 408")
         with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
             sock.sendall(f"GET /api/models HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n".encode())
             assert sock.recv(100).startswith(b"HTTP/1.1 200")

@@ -11,6 +11,7 @@ from plausible import symbolic
 from plausible.analysis.suite import variants
 from plausible.export import _symbolic_params, uniform_params
 from plausible.models.lambert import Lambertian
+from plausible.models.phong import ModifiedPhong
 from plausible.symbolic import SYM, SymbolicBranchError
 
 WI, WO = symbolic.direction("wi"), symbolic.direction("wo")
@@ -72,11 +73,21 @@ def test_a_model_with_a_python_if_cannot_be_exported():
         to_glsl(Broken())
 
 
+class _BranchingPhong(ModifiedPhong):
+    """Modified Phong with its sampling weight as a Python ``if`` on parameters,
+    ``ks / (kd + ks) if kd + ks > 0 else 0.5`` (the library's own is an
+    ``ops.where`` since parameters became kernel data)."""
+
+    @staticmethod
+    def spec_probability(ops, q):
+        s = q.kd + q.ks
+        return q.ks / s if s > 0 else 0.5
+
+
 def test_a_branch_on_a_parameter_exports_both_outcomes():
-    """Modified Phong's sampling weight is ``ks / (kd + ks) if kd + ks > 0 else 0.5``
-    (a Python if on parameters): as uniforms both outcomes are kept, and the graph
+    """A Python if on parameters: as uniforms both outcomes are kept, and the graph
     equals NumPy's pdf on either side of the branch."""
-    m = plausible.make("modified-phong")
+    m = _BranchingPhong()
     specs = uniform_params(m, True)
     _, q = _symbolic_params(m, specs)
     graph = symbolic.trace(lambda: m._pdf(SYM, WI, WO, q))
@@ -88,7 +99,7 @@ def test_a_branch_on_a_parameter_exports_both_outcomes():
 
 
 def test_a_branch_on_a_parameter_names_it_when_not_explored():
-    m = plausible.make("modified-phong")
+    m = _BranchingPhong()
     _, q = _symbolic_params(m, uniform_params(m, True))
     with pytest.raises(SymbolicBranchError, match=r"parameter\(s\) kd.x, kd.y, kd.z, ks.x"):
         symbolic.trace(lambda: m._pdf(SYM, WI, WO, q), explore=False)

@@ -255,3 +255,13 @@ def test_perceptual_checks_hold_when_the_perceptual_fit_wins_and_fail_otherwise(
     pc = {"albedo_max": 0.16, "perceptual": 4.74}   # docs/fitting.md's neumann-metal rows
     assert all(_ok(q) for q in perceptual_checks(ls, pc))
     assert not any(_ok(q) for q in perceptual_checks(pc, ls))
+
+
+def test_a_curve_that_badly_decreases_passes_and_one_that_diverges_fails():
+    """Phong and He-Torrance: falling to a constant (slope 0) or to 0 (He-Torrance:
+    a ~ cos^0.075 measured) passes; growing like 1/sqrt(cos) fails."""
+    c = np.array(RATE_COS)
+    falling = _curve(1.0, 0.1) * np.where(TH > 89, 0.1, 1.0)
+    for label in ("Phong (n = 150)", "He-Torrance (sigma0 = 0.1, tau = 1.7)"):
+        assert all(_ok(q) for q in rate_checks(label, falling, TH, 0.004 * c ** 0.075))
+        assert not all(_ok(q) for q in rate_checks(label, falling, TH, 0.004 / np.sqrt(c)))

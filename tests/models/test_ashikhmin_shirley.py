@@ -482,7 +482,8 @@ def test_sample_consistent_with_pdf_and_eval(model):
     """
     rng = np.random.default_rng(23)
     wi = hemisphere(rng, 50000)
-    s = model.sample(wi, rng.random((50000, 3)))
+    # NumPy, the backend of the hooks compared bitwise below (``auto`` may pick Dr.Jit)
+    s = model.sample(wi, rng.random((50000, 3)), backend="numpy")
     ok = s.pdf > 0
     assert ok.mean() > 0.2
     assert np.all(s.weight[~ok] == 0)

@@ -84,8 +84,10 @@ def test_sampling_is_the_base_sampler_and_weight_carries_the_correction():
     m = pumped(PHONG, "max", 2)
     L = direction(math.radians(60.0))
     u = np.random.default_rng(11).random((200_000, 3))
-    s = m.sample(L, u)
-    sb = base.sample(L, u)
+    # one backend for both: ``auto`` may pick Dr.Jit for one model (its kernel is
+    # compiled already) and NumPy for the other, whose last bits differ
+    s = m.sample(L, u, backend="numpy")
+    sb = base.sample(L, u, backend="numpy")
     assert np.array_equal(s.wo, sb.wo)
     assert np.allclose(s.pdf, sb.pdf)
     ok = s.pdf > 0

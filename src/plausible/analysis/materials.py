@@ -17,19 +17,23 @@ sum.  ``tests/analysis/test_materials.py`` checks that the numbers agree with
 ``plausible.albedo(plausible.material(...), wi)``.  All fits are isotropic, so
 one azimuth suffices.
 
-``scripts/materials_table.py`` writes the tables of ``docs/materials.md`` with
-:func:`check_fits` and :func:`markdown`.
+``plausible check --materials [--fit FIT] [--quick] [--json] [--out DIR]`` runs
+:func:`check_fits` and writes the tables of ``docs/materials.md`` with
+:func:`write_tables` (``--out docs``).
 """
 
 from __future__ import annotations
 
+import csv
 import math
+import os
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ..library import fit_set, fits as all_fits, material, materials
-from .albedo import albedo, direction
+from .albedo import TOL as ALBEDO_TOL, albedos, direction
 from .checks import reciprocity
 
 #: Incidence angles (degrees) of the albedo grid: dense toward grazing, where
@@ -41,6 +45,10 @@ TOL = 1e-4
 #: Reciprocity verdict: relative asymmetry at most this.
 RECIPROCITY_TOL = 1e-9
 CHANNELS = "RGB"
+#: ``quick``: the albedo's error bound (ten times below the margin :data:`TOL` of
+#: the verdict, so no verdict changes) and the reciprocity grid (``n_theta, n_phi``).
+QUICK_TOL = 1e-5
+QUICK_RECIPROCITY = (8, 16)
 
 
 @dataclass
@@ -78,16 +86,18 @@ class FitCheck:
         return d
 
 
-def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG):
+def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG, tol: float = ALBEDO_TOL):
     """``(values, errors)`` of shape ``(len(thetas_deg), channels)``: the directional
-    albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``."""
+    albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``,
+    each part's albedos at every angle refined together
+    (:func:`~plausible.analysis.albedo.albedos`) to the error bound ``tol``."""
     ch = model.channels or 1
     vals = np.zeros((len(thetas_deg), ch))
     errs = np.zeros((len(thetas_deg), ch))
+    wis = [direction(math.radians(t), 0.0) for t in thetas_deg]
     for part, scale in zip(model.parts, model.scales):
         s = np.ones(ch) if scale is None else np.broadcast_to(np.asarray(scale, dtype=np.float64), (ch,))
-        for i, t in enumerate(thetas_deg):
-            r = albedo(part, direction(math.radians(t), 0.0))
+        for i, r in enumerate(albedos(part, wis, tol=tol)):
             v = np.broadcast_to(np.asarray(r.value, dtype=np.float64), (ch,))
             e = np.broadcast_to(np.asarray(r.error, dtype=np.float64), (ch,))
             vals[i] += s * v
@@ -95,16 +105,20 @@ def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG):
     return vals, errs
 
 
-def check_fit(name: str, fit: str, thetas_deg=THETAS_DEG) -> FitCheck:
+def check_fit(name: str, fit: str, thetas_deg=THETAS_DEG, quick: bool = False) -> FitCheck:
     """The :class:`FitCheck` of one material of one fit set."""
-    return check_model(material(name, fit), name, fit, thetas_deg)
+    return check_model(material(name, fit), name, fit, thetas_deg, quick=quick)
 
 
-def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG) -> FitCheck:
+def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG, quick: bool = False) -> FitCheck:
     """The :class:`FitCheck` of any :class:`~plausible.models.sum.Sum` (``name``
-    and ``fit`` only label the row)."""
-    rec = reciprocity(model)
-    vals, errs = albedo_curve_of_sum(model, thetas_deg)
+    and ``fit`` only label the row).  ``quick``: albedos to :data:`QUICK_TOL`,
+    reciprocity on the :data:`QUICK_RECIPROCITY` grid."""
+    if quick:
+        rec = reciprocity(model, n_theta=QUICK_RECIPROCITY[0], n_phi=QUICK_RECIPROCITY[1])
+    else:
+        rec = reciprocity(model)
+    vals, errs = albedo_curve_of_sum(model, thetas_deg, QUICK_TOL if quick else ALBEDO_TOL)
     i, c = np.unravel_index(int(np.argmax(vals)), vals.shape)
     return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas_deg[i]),
                     CHANNELS[c] if vals.shape[1] == 3 else "grey", float(np.max(vals[0])),
@@ -112,24 +126,62 @@ def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG) -> 
                     tuple(float(x) for x in vals.max(axis=1)))
 
 
-def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None) -> list[FitCheck]:
-    """:func:`check_fit` of every material (or ``names``) of every loadable fit
-    set (or ``fits``).  ``progress``, if given, is called with no argument after
-    each fit.  Fit sets that cannot be loaded are skipped (see
-    :attr:`plausible.library.FitSet.reason`)."""
+def work_list(fits=None, names=None) -> list[tuple]:
+    """``(material, fit)`` of every material (or ``names``) of every loadable fit
+    set (or ``fits``), in table order.  Fit sets that cannot be loaded are
+    skipped (see :attr:`plausible.library.FitSet.reason`)."""
     keys = [fit_set(k).key for k in fits] if fits else [f.key for f in all_fits() if f.built]
-    rows = []
+    out = []
     for key in keys:
         if not fit_set(key).built:
             continue
         avail = materials(key)
-        for name in (names if names is not None else avail):
-            if name not in avail:
-                continue
-            rows.append(check_fit(name, key, thetas_deg))
+        out.extend((name, key) for name in (names if names is not None else avail) if name in avail)
+    return out
+
+
+def _check_chunk(chunk, thetas_deg, quick):
+    return [check_fit(name, key, thetas_deg, quick) for name, key in chunk]
+
+
+def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, quick: bool = False,
+               jobs: int = 1) -> list[FitCheck]:
+    """:func:`check_fit` of every material (or ``names``) of every loadable fit
+    set (or ``fits``; see :func:`work_list`).  ``progress``, if given, is called
+    with no argument after each fit.  ``jobs`` > 1: that many worker processes,
+    each checking runs of consecutive fits of one set (they share one compiled
+    kernel per model structure); the rows come back in the same order."""
+    work = work_list(fits, names)
+    if jobs <= 1 or len(work) < 2:
+        rows = []
+        for name, key in work:
+            rows.append(check_fit(name, key, thetas_deg, quick))
             if progress:
                 progress()
+        return rows
+    from concurrent.futures import ProcessPoolExecutor
+
+    size = max(1, min(16, len(work) // (4 * jobs)))
+    chunks = [work[s:s + size] for s in range(0, len(work), size)]
+    rows = []
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        for got in pool.map(_check_chunk, chunks, [thetas_deg] * len(chunks), [quick] * len(chunks)):
+            rows.extend(got)
+            if progress:
+                for _ in got:
+                    progress()
     return rows
+
+
+def default_jobs() -> int:
+    """Worker processes for :func:`check_fits` from the command line: the cores
+    this process may use, at most 2 (Dr.Jit's kernels use every core already;
+    a second process keeps them busy while the other does its NumPy work)."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        n = os.cpu_count() or 1
+    return max(1, min(2, n))
 
 
 def summary(rows) -> list[dict]:
@@ -165,5 +217,40 @@ def markdown(rows, only_gains: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["FitCheck", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits", "check_model",
-           "markdown", "summary"]
+BEGIN, END = "<!-- table:begin -->", "<!-- table:end -->"
+
+
+def write_tables(rows, out) -> list[Path]:
+    """Write the tables of ``rows`` into the folder ``out``:
+    ``materials-table.md`` (the summary and one row per fit), ``materials-table.csv``
+    (the same numbers), and the summary with the fits that gain energy between the
+    markers :data:`BEGIN` / :data:`END` of ``materials.md`` when it exists there.
+    Returns the files written."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    md = out / "materials-table.md"
+    md.write_text("# Plausibility of every published MERL fit\n\nGenerated by `plausible check --materials "
+                  "--out docs` (see [materials.md](materials.md) for what is measured and how).\n\n"
+                  + markdown(rows))
+    cs = out / "materials-table.csv"
+    with open(cs, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["material", "fit", "asymmetry", "max_albedo", "theta_deg", "channel", "albedo_normal",
+                    "error", "gains_energy"])
+        for r in rows:
+            w.writerow([r.material, r.fit, f"{r.asymmetry:.3e}", f"{r.max_albedo:.6f}", f"{r.theta_deg:g}",
+                        r.channel, f"{r.albedo_normal:.6f}", f"{r.error:.2e}", int(r.gains_energy)])
+    written = [md, cs]
+    doc = out / "materials.md"
+    if doc.exists():
+        text = doc.read_text()
+        if BEGIN in text and END in text:
+            head, rest = text.split(BEGIN, 1)
+            _, tail = rest.split(END, 1)
+            doc.write_text(head + BEGIN + "\n" + markdown(rows, only_gains=True) + END + tail)
+            written.append(doc)
+    return written
+
+
+__all__ = ["FitCheck", "QUICK_TOL", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits",
+           "check_model", "default_jobs", "markdown", "summary", "work_list", "write_tables"]

@@ -1,7 +1,7 @@
 """Real materials: the plausibility of the published MERL fits, and an atlas of them.
 
 * ``materials-check``: :func:`plausible.analysis.materials.check_fits` on every
-  loadable fit set for a sample of materials (all materials: ``scripts/materials_table.py``,
+  loadable fit set for a sample of materials (all materials: ``plausible check --materials``,
   ``docs/materials.md``): reciprocity and the largest directional albedo.
 * ``materials-atlas``: every material of one fit set on spheres, and one material
   across every fitted model, rendered in Mitsuba with ``plausible_material``
@@ -29,7 +29,7 @@ QUICK_CHECK = (("pink-felt", "nickel"), ("ngan2005/ward-duer", "ngan2005/ashikhm
         "checked: reciprocity (largest relative asymmetry) and the largest directional albedo over incidence "
         "and RGB channel (incidence 0 to 89.9 degrees and cos(theta) = 1e-5, 1e-9, the grazing angles of "
         "plausible check --quick); a value above 1 gains energy. The complete table of every material is "
-        "docs/materials.md (scripts/materials_table.py, incidence to 89.9 degrees).",
+        "docs/materials.md (plausible check --materials, incidence to 89.9 degrees).",
         materials=CHECK_MATERIALS, fits="every loadable fit set (quick: 2 materials x 2 fits)")
 def materials_check(ctx, materials, fits):
     from plausible import library

@@ -102,6 +102,12 @@ def furnace(ctx, exponents, rs, rd):
     ctx.table("centres", dict(nu=rows[:, 0], nv=rows[:, 1], centre=rows[:, 2], centre_se=rows[:, 3],
                               albedo_normal=rows[:, 4]))
     rim_checks(ctx, mi, exponents[0], rs, rd)
+    diag = [(r[2], r[3]) for r in rows if r[0] == r[1]]
+    rises = [b[0] - a[0] for a, b in zip(diag, diag[1:])]
+    ctx.measure("'As the exponents get larger, less energy is lost': smallest rise of the rendered centre from one "
+                "diagonal sphere (nu = nv) to the next, in standard errors", min(
+                    r / float(np.hypot(a[1], b[1])) for r, a, b in zip(rises, diag, diag[1:])), at_least=2.0,
+                note="centres " + " / ".join(f"{c:.4f}" for c, _ in diag))
     ctx.measure("nu = nv = 10: directional albedo at normal incidence vs the paper's 'about 68%'", rows[0, 4],
                 0.68, 0.02, note=f"plausible.albedo; the render's centre reads {rows[0, 2]:.3f} +- {rows[0, 3]:.3f}; "
                 "'about' read as +-2 points")
@@ -179,9 +185,16 @@ def three_views(ctx, nu, nv, rs, rd):
     # the effect, on the model itself: specular albedo rises and diffuse albedo falls toward grazing
     spec = plausible.make("ashikhmin-shirley-specular", nu=nu, nv=nv, rs=rs)
     diff = plausible.make("ashikhmin-shirley-diffuse", rs=rs, rd=1.0)
+    sa, da = [], []
     for t in (0.0, 60.0, 85.0):
-        ctx.measure(f"specular albedo at {t:g} deg (rs = {rs})", float(albedo(spec, direction(math.radians(t)))))
-        ctx.measure(f"diffuse albedo per unit rd at {t:g} deg", float(albedo(diff, direction(math.radians(t)))))
+        sa.append(float(albedo(spec, direction(math.radians(t)))))
+        da.append(float(albedo(diff, direction(math.radians(t)))))
+        ctx.measure(f"specular albedo at {t:g} deg (rs = {rs})", sa[-1])
+        ctx.measure(f"diffuse albedo per unit rd at {t:g} deg", da[-1])
+    ctx.measure("'strengthening of the specular reflection near the silhouette': specular albedo at 85 deg / at 0 deg",
+                sa[-1] / sa[0], at_least=2.0)
+    ctx.measure("'simultaneous decrease in the intensity of the red color': diffuse albedo at 85 deg / at 0 deg",
+                da[-1] / da[0], at_most=0.9)
 
 
 @figure("as-lambert-vs-as", "Lambertian sphere next to an Ashikhmin-Shirley sphere (n = 5)", f"{JGT}, fig. 4",

@@ -480,11 +480,55 @@ def unconstrained(problem, vars_, params) -> list:
     return [g for g in groups if g]
 
 
+class _Values:
+    """One evaluation of a candidate model for the objective: ``f`` at the
+    target's pairs and, with an albedo term, the :class:`_FastAlbedo` sums.
+
+    On Dr.Jit (the backend rule, :func:`plausible.backend.choose`, on all the
+    pairs and albedo nodes together) every evaluation is one launch of one
+    kernel, :class:`plausible.backend.PairKernel` over the pairs and the nodes
+    concatenated: the parameters are kernel data, so a whole fit compiles one
+    kernel per model structure.  On NumPy, ``model.eval`` as before; the two
+    agree to the backends' tolerance (``tests/fitting/test_fit.py``)."""
+
+    def __init__(self, tgt: Target, fast: _FastAlbedo | None):
+        from .. import backend
+        from ..bxdf import as_directions
+
+        self.tgt, self.fast = tgt, fast
+        wi = np.broadcast_to(as_directions("wi", tgt.wi), np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo)))
+        pairs = [(wi.reshape(-1, 3), np.broadcast_to(as_directions("wo", tgt.wo), wi.shape).reshape(-1, 3))]
+        for gwi, gwo, _ in (fast.grids if fast else ()):
+            pairs.append((np.broadcast_to(gwi, gwo.shape), gwo))
+        self.sizes = [len(a) for a, _ in pairs]
+        total = sum(self.sizes)
+        self.kernel = None
+        if backend.choose(total, None) == "drjit":
+            self.kernel = backend.PairKernel(np.concatenate([a for a, _ in pairs]),
+                                             np.concatenate([b for _, b in pairs]))
+
+    def __call__(self, m):
+        """``(f at the target's pairs, albedo sums or None)``."""
+        if self.kernel is None:
+            return m.eval(self.tgt.wi, self.tgt.wo), (self.fast(m) if self.fast else None)
+        f = self.kernel(m)
+        n0 = self.sizes[0]
+        shape = np.broadcast_shapes(np.shape(self.tgt.wi), np.shape(self.tgt.wo))[:-1] + f.shape[1:]
+        if not self.fast:
+            return f.reshape(shape), None
+        out, s = [], n0
+        for (_, _, w), k in zip(self.fast.grids, self.sizes[1:]):
+            out.append(np.tensordot(w, f[s:s + k], axes=(0, 0)))
+            s += k
+        return f[:n0].reshape(shape), np.array(out)
+
+
 @dataclass
 class _Problem:
     """What every objective of one fit shares: the model class, the target, the
-    metric and its settings, the albedo rule (None without an albedo term) and
-    the deadline (``time.monotonic()`` seconds, or None)."""
+    metric and its settings, the albedo rule (None without an albedo term), the
+    evaluation of a candidate (:class:`_Values`) and the deadline
+    (``time.monotonic()`` seconds, or None)."""
 
     info: object
     tgt: Target
@@ -494,12 +538,13 @@ class _Problem:
     fast: _FastAlbedo | None
     maxiter: int
     deadline: float | None
+    values: _Values | None = None
 
     @classmethod
     def make(cls, info, proto, tgt, metric, combine, maxiter, deadline):
         use_albedo = metric == "perceptual" and tgt.albedo is not None
         fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
-        return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline)
+        return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast))
 
 
 def _channel(g, c):
@@ -552,8 +597,9 @@ class _Objective:
             m = self.model_at(x)
         except ValueError:
             return PENALTY
-        cc = _reduce(m.eval(pb.tgt.wi, pb.tgt.wo), pb.tgt.wo, self.c)
-        a = _reduce_alb(pb.fast(m), self.c) if pb.fast else None
+        f, alb = pb.values(m)
+        cc = _reduce(f, pb.tgt.wo, self.c)
+        a = _reduce_alb(alb, self.c) if pb.fast else None
         if beta is None:
             e = M.errors(cc, self.g, a, self.A, pb.eps, pb.combine)
             return {"l2-cos": e["l2-cos"] ** 2, "log": e["log"] ** 2}.get(pb.metric, e["perceptual"])

@@ -62,7 +62,11 @@ def half_vector_exponent(ops, h, nu, nv):
 
     Isotropic fast path: when ``nu == nv`` as plain floats the exponent is ``nu``
     itself (no division, no 0/0 at ``h = n``); otherwise
-    :func:`plausible.warps.anisotropic_exponent`.
+    :func:`plausible.warps.anisotropic_exponent`, which equals ``nu`` to rounding
+    when ``nu == nv``.  Arrays (parameters as kernel data, differentiable
+    textures) always take the general formula: one kernel for every value, and
+    derivatives with respect to both exponents (an ``ops.where`` on ``nu == nv``
+    would give ``nv`` a zero derivative at ``nu == nv``).
     """
     if isinstance(nu, float) and isinstance(nv, float) and nu == nv:
         return nu

@@ -126,20 +126,24 @@ class ModifiedPhong(BxDF):
                              f"(energy conservation), got kd + ks = {fmt(total)}")
 
     @staticmethod
-    def spec_probability(q):
-        s = q.kd + q.ks
-        return q.ks / s if s > 0 else 0.5
+    def spec_probability(ops, q):
+        """``ks / (ks + kd)`` (channel means), 0.5 when both are zero; by
+        ``ops.where``, not a Python ``if``, so that parameters may be kernel data
+        (one compiled kernel for every value, :mod:`plausible.kernel_params`)."""
+        s = q.ks + q.kd
+        pos = s > 0
+        return ops.where(pos, q.ks / ops.where(pos, s, 1.0), 0.5)
 
     def _f(self, ops, wi, wo, p):
         val = p.kd * INV_PI + p.ks * phong_norm(p.n) * phong_lobe(ops, wi, wo, p.n)
         return ops.where(above(ops, wi, wo), val, 0.0)
 
     def _pdf(self, ops, wi, wo, q):
-        ps = self.spec_probability(q)
+        ps = self.spec_probability(ops, q)
         return ps * lobe_pdf(ops, wi, wo, q.n) + (1.0 - ps) * diffuse_pdf(ops, wi, wo)
 
     def _sample(self, ops, wi, u, q):
-        ps = self.spec_probability(q)
+        ps = self.spec_probability(ops, q)
         spec = phong_sample(ops, wi, q.n, u[1], u[2])
         diff = warps.cosine_hemisphere(ops, u[1], u[2])
         return warps.mixture(ops, u[0] < ps, spec, diff)

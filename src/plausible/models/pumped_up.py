@@ -321,6 +321,13 @@ class PumpedUp(BxDF):
                              f"rs/eta/k have {self.channels}; give them the same count")
         self.channels = chans.pop() if chans else None
 
+    def _kernel_view(self, convert):
+        """Its own data and the base's (:mod:`plausible.kernel_params`); the
+        albedo tables enter every kernel as arrays already."""
+        out = super()._kernel_view(convert)
+        out.base = self.base._kernel_view(convert)
+        return out
+
     def g(self, ops, wi, wo):
         """The total correction of every level (:func:`correction`)."""
         return correction(ops, self.params["correction"],

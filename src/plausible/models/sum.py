@@ -36,6 +36,7 @@ import numpy as np
 
 from .. import warps
 from ..bxdf import BxDF
+from ..kernel_params import is_data
 
 #: Cosines of the incidences at which a part's albedo is estimated.
 ESTIMATE_COSINES = (1.0, 0.75, 0.5, 0.25)
@@ -151,6 +152,22 @@ class Sum(BxDF):
         out._part_p = tuple(conv_ns(p) for p in self._part_p)
         out._scale_p = tuple(convert(s) if isinstance(s, np.ndarray) else s for s in self.scales)
         return out
+
+    def _kernel_view(self, convert):
+        """Parts, scales and selection probabilities as kernel data
+        (:mod:`plausible.kernel_params`)."""
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        out.parts = tuple(m._kernel_view(convert) for m in self.parts)
+        out._part_p = tuple(m.p for m in out.parts)
+        out._part_q = tuple(m.q for m in out.parts)
+        out._scale_p = tuple(convert(s) if is_data(s) else s for s in self._scale_p)
+        out.probabilities = tuple(convert(float(x)) for x in self.probabilities)
+        return out
+
+    def _structure(self):
+        return ("Sum", self.channels, tuple(m._structure() for m in self.parts),
+                tuple(None if s is None else np.shape(s) for s in self.scales))
 
     # -- hooks ----------------------------------------------------------------------
     def _f(self, ops, wi, wo, p):

@@ -103,22 +103,26 @@ class Ward(BxDF):
     )
 
     @staticmethod
-    def spec_probability(q):
+    def spec_probability(ops, q):
+        """``rs / (rs + rd)`` (channel means), 0.5 when both are zero; by
+        ``ops.where``, not a Python ``if``, so that parameters may be kernel data
+        (one compiled kernel for every value, :mod:`plausible.kernel_params`)."""
         s = q.rs + q.rd
-        return q.rs / s if s > 0 else 0.5
+        pos = s > 0
+        return ops.where(pos, q.rs / ops.where(pos, s, 1.0), 0.5)
 
     def _f(self, ops, wi, wo, p):
         diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
         return diffuse + p.rs * ward_specular(ops, wi, wo, p.alpha_x, p.alpha_y, p.variant)
 
     def _pdf(self, ops, wi, wo, q):
-        ps = self.spec_probability(q)
+        ps = self.spec_probability(ops, q)
         spec = warps.beckmann_reflected_pdf(ops, wi, wo, q.alpha_x, q.alpha_y)
         diff = ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
         return ps * spec + (1.0 - ps) * diff
 
     def _sample(self, ops, wi, u, q):
-        ps = self.spec_probability(q)
+        ps = self.spec_probability(ops, q)
         h = warps.beckmann_half_vector(ops, q.alpha_x, q.alpha_y, u[1], u[2])
         spec = vec.reflect(wi, h)
         diff = warps.cosine_hemisphere(ops, u[1], u[2])
