@@ -347,11 +347,20 @@ class HeTorrance(BxDF):
         sums too few (export the model with the new values)."""
         if _varying(p.sigma0):
             return None
-        return g_bound(self.p.sigma0, self.p.wavelength)
+        return g_bound(self.params["sigma0"], self.params["wavelength"])
+
+    def _structure(self):
+        """The kernel's structure (:mod:`plausible.kernel_params`) includes the number of
+        terms, which the parameters' values choose (:meth:`bound`, :func:`exact_terms`),
+        and the reference wavelength of ``rough="beckmann"``."""
+        from .. import kernel_params
+
+        return (kernel_params.default_structure(self), exact_terms(self.bound(self.p) or 0.0),
+                float(np.max(self.params["wavelength"])))
 
     def _f(self, ops, wi, wo, p):
         diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
-        lam_ref = float(np.max(self.p.wavelength))
+        lam_ref = float(np.max(self.params["wavelength"]))
         return directional_diffuse(ops, wi, wo, p, self.bound(p), lam_ref) + diffuse
 
     # -- the delta lobe ---------------------------------------------------------------

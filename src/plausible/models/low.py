@@ -20,7 +20,8 @@ Both use the "ABC" curve ``S(f) = A / (1 + B f^2)^C`` (eq. 8):
   or ``N = 1`` (eq. 15 as printed, ``normalization="none"``).
 
 ``F`` is the exact unpolarised Fresnel reflectance of a dielectric of index
-``eta`` (Cook & Torrance's form in bbm; equal for ``eta >= 1``).
+``eta`` in Cook & Torrance's form (:func:`plausible.fresnel.cook`, as bbm),
+exactly 0 at ``eta = 1``.
 """
 
 from __future__ import annotations
@@ -107,7 +108,7 @@ def microfacet(ops, wi, wo, p):
     h, kh = vec.half_vector_cos(ops, wi, wo)
     ci = ops.where(ok, wi[2], 1.0)
     co = ops.where(ok, wo[2], 1.0)
-    F = fresnel.dielectric(ops, kh, p.eta)
+    F = fresnel.cook(ops, kh, p.eta)
     g = vgroove_g(ops, wi, wo, h, kh)
     inv_n = INV_PI if p.normalization == "pi" else 1.0
     return ops.where(ok, p.A * (abc_ndf(ops, h, p.B, p.C) * g * F * inv_n) / (ci * co), 0.0)
@@ -147,7 +148,7 @@ def smooth(ops, wi, wo, p):
     ex, ey = wi[0] - wo[0], wi[1] - wo[1]
     cd = ops.sqrt(ops.maximum(1.0 - 0.25 * (ex * ex + ey * ey), 0.0))
     s = ops.exp(-p.C * ops.log1p(p.B * (dx * dx + dy * dy)))
-    return ops.where(ok, p.A * (s * fresnel.dielectric(ops, cd, p.eta)), 0.0)
+    return ops.where(ok, p.A * (s * fresnel.cook(ops, cd, p.eta)), 0.0)
 
 
 #: Exponent of the sampling density of ``D_p`` (at least 1.5: integrable on the plane).
