@@ -106,8 +106,8 @@ def cook(ops, cos_i, eta):
     den = c * (g - c) + 1.0
     okb = ops.abs(den) > 0
     b = (c * s - 1.0) / ops.where(okb, den, 1.0)
-    t = (eta - 1.0) * (eta + 1.0)
-    grazing = ops.minimum(ops.maximum(-1e300 * t, 0.0), 1.0)    # c = g = 0: 1 if eta < 1, 0 if eta = 1
+    # c = g = 0 (grazing, eta <= 1): 1 under total internal reflection (eta < 1), 0 at eta = 1
+    grazing = ops.where((eta - 1.0) * (eta + 1.0) + 0.0 * c < 0.0, 1.0, 0.0)
     return ops.where(ok & okb, 0.5 * a * a * (1.0 + b * b), grazing)
 
 
