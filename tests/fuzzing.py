@@ -41,6 +41,7 @@ import numpy as np
 
 import plausible
 from plausible.analysis.suite import variants
+from plausible.bxdf import mixture_probabilities
 from plausible.models import ashikhmin_shirley as AS
 from plausible.models import phong as PH
 from plausible.ops import NP
@@ -186,7 +187,7 @@ def weight_bound(m, wi):
         spec = {"ward": 1 / np.sqrt(ci), "duer": 1 / ci, "balanced": 2.0 * one}[p["variant"]]
         return _mix(type(m).spec_probability(NP, q), _cmax(p["rs"]) * spec, _cmax(p["rd"]) * one)
     if name == "schlick":
-        ps = m._spec_probability(NP, wi.T, q)
+        ps = mixture_probabilities(NP, m.lobe_weights(NP, wi.T, q))[0]
         # azimuth="sqrt": f has sqrt(A) where the sampler has A, A in [p, 1/p]: 1/sqrt(p) more
         az = 1.0 / math.sqrt(p["p"]) if p["azimuth"] == "sqrt" else 1.0
         return _mix(ps, 2.0 * az / (p["r"] * ci), _cmax(p["rd"]) * one)

@@ -20,6 +20,17 @@ Non-unit directions are normalised (a direction is a direction, whatever its
 length); zero-length or non-finite directions raise :class:`ValueError`.
 Colour parameters give ``eval`` and ``weight`` a trailing channel axis.
 
+A model made of several lobes (a diffuse term and a glossy one) may also
+declare them, as pbrt-v4's BxDFs declare their flags and Mitsuba's BSDFs their
+components: :meth:`BxDF.lobes` returns one :class:`Lobe` per term (its kind, its
+``f``, its own sampler and density, and for a diffuse lobe its directional
+albedo) and :meth:`BxDF.lobe_weights` the selection weights of the model's
+one-sample mixture.  :func:`mixture_f`, :func:`mixture_pdf` and
+:func:`mixture_sample` compose them, over every lobe or over a chosen subset
+(the Mitsuba plugins' ``BSDFContext.type_mask`` / ``component``); over every
+lobe they equal the model's own ``_f``, ``_pdf`` and ``_sample``
+(``tests/test_lobes.py`` checks it for every registered model).
+
 A model implements three component-wise hooks, written against an ops
 namespace (:mod:`plausible.ops`), which the NumPy front end here and the
 Mitsuba 3 plugins both call: ``_f(ops, wi, wo, p)``, ``_pdf(ops, wi, wo, q)``
@@ -32,7 +43,7 @@ from __future__ import annotations
 
 import copy
 from types import SimpleNamespace
-from typing import ClassVar, NamedTuple
+from typing import Callable, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -223,6 +234,24 @@ def stack(c):
     return np.stack(np.broadcast_arrays(*c), axis=-1)
 
 
+class Lobe(NamedTuple):
+    """One term of a model, a component of its mixture (see the module docstring).
+
+    ``kind``: ``"diffuse"`` or ``"glossy"`` (or, for a model that declares no
+    lobes, its whole ``LOBES`` set); ``f(ops, wi, wo, p)`` the term's value;
+    ``pdf(ops, wi, wo, q)`` and ``sample(ops, wi, u, q)`` its own sampler (``u``
+    the model's three numbers; ``u[0]`` comes rescaled to ``[0, 1)`` within the
+    lobe's share, for a lobe that is itself a mixture); ``albedo(ops, wi, p)``
+    the directional albedo ``int f cos`` of a diffuse lobe (None for a glossy one).
+    """
+
+    kind: object
+    f: Callable
+    pdf: Callable
+    sample: Callable
+    albedo: Callable | None = None
+
+
 class Params(dict):
     """A model's validated parameters, read-only: the formulas read them once,
     when the model is built, so a changed value would show in the ``repr``, the
@@ -353,6 +382,33 @@ class BxDF:
 
     def _sample(self, ops, wi, u, q):
         raise NotImplementedError
+
+    def lobes(self) -> tuple:
+        """The model's terms as :class:`Lobe` components, in the order of its
+        mixture.  Default: one lobe, the whole model (kind: its ``LOBES``)."""
+        kind = next(iter(self.LOBES)) if len(self.LOBES) == 1 else self.LOBES
+        return (Lobe(kind, self._f, self._pdf, self._sample),)
+
+    def lobe_weights(self, ops, wi, q) -> tuple:
+        """Selection weights of :meth:`lobes` in the model's mixture, given ``wi``
+        (need not sum to one; :func:`mixture_probabilities` normalises them)."""
+        return (1.0,)
+
+    def components(self) -> tuple:
+        """:meth:`lobes`, or one lobe of the model's own ``_f``, ``_pdf`` and
+        ``_sample`` where a subclass redefines one of them (or the weights) below
+        the class that declared the lobes (its lobes would no longer be its terms)."""
+        cls = type(self)
+        owner = next(c for c in cls.__mro__ if "lobes" in vars(c))
+        for hook in ("_f", "_pdf", "_sample", "lobe_weights"):
+            if not issubclass(owner, next(c for c in cls.__mro__ if hook in vars(c))):
+                return BxDF.lobes(self)
+        return self.lobes()
+
+    def component_weights(self, ops, wi, q) -> tuple:
+        """:meth:`lobe_weights` for :meth:`components`."""
+        lobes = self.components()
+        return self.lobe_weights(ops, wi, q) if len(lobes) > 1 else (1.0,)
 
     def peak_directions(self, wi: np.ndarray) -> list:
         """Directions where the lobe may peak, for a given ``wi`` of shape (3,).
@@ -504,4 +560,109 @@ def above(ops, wi, wo):
     return (wi[2] > HORIZON) & (wo[2] > HORIZON)
 
 
-__all__ = ["BxDF", "Params", "Sample", "Param", "above", "as_directions", "vec"]
+# -- a model's lobes as a mixture -----------------------------------------------------
+
+def mixture_probabilities(ops, weights, enabled=None) -> list:
+    """``P_k = w_k / sum_{j enabled} w_j`` for the enabled lobes (0 for the others),
+    each its own quotient (``1 - sum`` of the others would round a small share
+    to zero); equal shares of the enabled lobes where their weights sum to 0.
+    ``enabled``: a sequence of booleans (Python), None for every lobe."""
+    enabled = _switched_on(enabled, len(weights))
+    count = sum(enabled)
+    if count == 0:
+        return [0.0] * len(weights)
+    total = 0.0
+    for w, on in zip(weights, enabled):
+        if on:
+            total = total + w
+    if isinstance(total, (int, float)):   # constant weights: plain numbers
+        return [(w / total if total > 0 else 1.0 / count) if on else 0.0
+                for w, on in zip(weights, enabled)]
+    pos = total > 0
+    inv = 1.0 / ops.where(pos, total, 1.0)
+    return [ops.where(pos, w * inv, 1.0 / count) if on else 0.0 for w, on in zip(weights, enabled)]
+
+
+def _lobes_of(model, components: bool):
+    """``(lobes, weights function)``: what ``model`` declares (its own hooks use
+    it), or its :meth:`BxDF.components` (what a renderer uses)."""
+    if components:
+        return model.components(), model.component_weights
+    return model.lobes(), model.lobe_weights
+
+
+def mixture_f(ops, model, wi, wo, p, enabled=None, components=False):
+    """The sum of the enabled lobes' ``f`` (0 where none is enabled).  ``components``:
+    over :meth:`BxDF.components` instead of :meth:`BxDF.lobes`."""
+    lobes = _lobes_of(model, components)[0]
+    return add_values([lobe.f(ops, wi, wo, p) for lobe, on in zip(lobes, _switched_on(enabled, len(lobes)))
+                       if on])
+
+
+def add_values(values):
+    """The sum of model values, each a number, an array or a tuple of channel
+    components (a model may return its colour as a tuple, e.g. a MERL table);
+    0.0 for none."""
+    if not values:
+        return 0.0
+    total = values[0]
+    for v in values[1:]:
+        if isinstance(total, tuple) or isinstance(v, tuple):
+            a = total if isinstance(total, tuple) else (total,) * len(v)
+            b = v if isinstance(v, tuple) else (v,) * len(a)
+            total = tuple(x + y for x, y in zip(a, b))
+        else:
+            total = total + v
+    return total
+
+
+def mixture_pdf(ops, model, wi, wo, q, enabled=None, components=False):
+    """``sum_k P_k pdf_k(wi, wo)`` over the enabled lobes (:func:`mixture_probabilities`)."""
+    lobes, weights = _lobes_of(model, components)
+    probs = mixture_probabilities(ops, weights(ops, wi, q), enabled)
+    total = 0.0
+    for lobe, pk, on in zip(lobes, probs, _switched_on(enabled, len(lobes))):
+        if on:
+            total = total + pk * lobe.pdf(ops, wi, wo, q)
+    return total
+
+
+def mixture_sample(ops, model, wi, u, q, enabled=None, components=False):
+    """One-sample mixture over the enabled lobes: lobe ``k`` where ``u[0]`` falls
+    in its share ``[c_k, c_k + P_k)`` (a later match wins, as
+    :func:`plausible.warps.mixture` in the models), sampled with ``u[0]``
+    rescaled to ``[0, 1)`` inside that share.  Returns ``(wo, k)`` (``k`` the
+    lobe index, a float of the backend)."""
+    lobes, weights = _lobes_of(model, components)
+    probs = mixture_probabilities(ops, weights(ops, wi, q), enabled)
+    out, index, start = None, None, 0.0
+    for k, (lobe, pk, on) in enumerate(zip(lobes, probs, _switched_on(enabled, len(lobes)))):
+        if not on:
+            continue
+        u0 = ops.minimum(ops.maximum((u[0] - start) / ops.where(pk > 0, pk, 1.0), 0.0),
+                         0.9999999999999999)
+        wo = lobe.sample(ops, wi, (u0, u[1], u[2]), q)
+        if out is None:
+            out, index = wo, 0.0 * u0 + k
+        else:
+            pick = (u[0] >= start) & (pk > 0)
+            out = warps_mixture(ops, pick, wo, out)
+            index = ops.where(pick, 0.0 * u0 + k, index)
+        start = start + pk
+    return out, index
+
+
+def _switched_on(enabled, n: int) -> list:
+    return [True] * n if enabled is None else [bool(e) for e in enabled]
+
+
+def warps_mixture(ops, choose_a, a, b):
+    """Component-wise select between two directions (:func:`plausible.warps.mixture`;
+    imported here, not at the top: :mod:`plausible.warps` imports this module)."""
+    from .warps import mixture  # import cycle: warps -> bxdf
+
+    return mixture(ops, choose_a, a, b)
+
+
+__all__ = ["BxDF", "Lobe", "Params", "Sample", "Param", "above", "as_directions", "vec",
+           "mixture_probabilities", "mixture_f", "mixture_pdf", "mixture_sample", "add_values"]

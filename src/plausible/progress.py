@@ -67,6 +67,11 @@ def reporting(progress: Progress | None):
         _AMBIENT.reset(token)
 
 
+def ambient() -> Progress | None:
+    """The reporter :func:`reporting` set for the current context, or None."""
+    return _AMBIENT.get()
+
+
 def start(progress: Progress | None, total: int, label: str = "") -> Tick:
     """``progress(total, label)``; with ``progress=None``, the ambient reporter's
     (:func:`reporting`), else a tick that does nothing."""
@@ -106,4 +111,4 @@ class Counter:
         return tick
 
 
-__all__ = ["Counter", "Progress", "Tick", "reporting", "silent", "start", "within"]
+__all__ = ["Counter", "Progress", "Tick", "ambient", "reporting", "silent", "start", "within"]

@@ -117,12 +117,14 @@ def test_fuzzer_finds_a_pdf_that_loses_its_specular_part():
     from plausible.models import ashikhmin_shirley as AS
 
     b = mi.load_dict({"type": "ashikhmin_shirley"})
-    orig = type(b.model)._pdf
+    orig = type(b.model).lobe_weights
     try:
-        type(b.model)._pdf = lambda self, ops, wi, wo, q: AS.diffuse_pdf(ops, wi, wo) + 0.0 * orig(self, ops, wi, wo, q)
+        # the mixture's weights with the specular share zeroed: pdf = the diffuse lobe's
+        type(b.model).lobe_weights = lambda self, ops, wi, q: (0.0 * orig(self, ops, wi, q)[0],
+                                                               AS.lobe_probabilities(ops, wi[2], q.rs, q.rd)[1])
         assert any("> bound" in p for p in fuzz_plugin("ashikhmin_shirley", {}, np.random.default_rng(0)))
     finally:
-        type(b.model)._pdf = orig
+        type(b.model).lobe_weights = orig
 
 
 # -- the cases of issue 21 -------------------------------------------------------

@@ -8,6 +8,7 @@ import pytest
 from mi_helpers import mi
 
 import plausible
+import plausible.bxdf
 import plausible.mitsuba as pm
 from plausible.mitsuba import plugin as PL
 from plausible.mitsuba import props as P
@@ -43,21 +44,31 @@ def test_given_names_resolves_aliases_and_refuses_unknown_names_and_repeats():
     ("reciprocal-phong", False, True)])
 def test_flags_follow_the_declared_lobes(name, diffuse, glossy):
     model = plausible.make(name)
-    flags, sampled = PL.bsdf_flags(mi, model, model.info, varying=False)
+    flags, components, sampled = PL.bsdf_flags(mi, model, model.info, varying=False)
     F = mi.BSDFFlags
     assert bool(flags & F.DiffuseReflection) == diffuse and bool(flags & F.GlossyReflection) == glossy
-    assert sampled == (F.GlossyReflection if glossy else F.DiffuseReflection)
+    # one component per lobe, each of one kind: glossy first where both exist
+    want = ([F.GlossyReflection] if glossy else []) + ([F.DiffuseReflection] if diffuse else [])
+    assert sampled == want
+    assert [c & (F.DiffuseReflection | F.GlossyReflection) for c in components] == want
 
 
 def test_flags_change_with_the_declaration_not_the_name():
-    """A Lambertian that declares a glossy lobe is flagged glossy (the name is not read)."""
+    """A Lambertian whose lobe is declared glossy is flagged glossy (the name is not
+    read); one that declares no lobes is flagged from its LOBES."""
     info = plausible.info("lambertian")
 
     class Declared(info.cls):
-        LOBES = frozenset({"glossy"})
+        def lobes(self):
+            return (super().lobes()[0]._replace(kind="glossy"),)
 
-    flags, _ = PL.bsdf_flags(mi, Declared(), info, varying=False)
-    assert flags & mi.BSDFFlags.GlossyReflection and not flags & mi.BSDFFlags.DiffuseReflection
+    class Undeclared(info.cls):
+        LOBES = frozenset({"glossy"})
+        lobes = plausible.bxdf.BxDF.lobes
+
+    for cls in (Declared, Undeclared):
+        flags, _, _ = PL.bsdf_flags(mi, cls(), info, varying=False)
+        assert flags & mi.BSDFFlags.GlossyReflection and not flags & mi.BSDFFlags.DiffuseReflection
 
 
 def test_no_variant_error_names_each_reason(monkeypatch):

@@ -170,7 +170,8 @@ XML = """<scene version="3.0.0">
         <bsdf type="ashikhmin_shirley">
             <float name="nu" value="20"/>
             <float name="nv" value="200"/>
-            <rgb name="specular_reflectance" value="0.1, 0.2, 0.3"/>
+            <float name="int_ior" value="1.5"/>
+            <float name="ext_ior" value="1.0"/>
             <rgb name="diffuse_reflectance" value="0.5, 0.4, 0.3"/>
         </bsdf>
     </shape>
@@ -180,12 +181,13 @@ XML = """<scene version="3.0.0">
 
 def test_xml_scene_with_aliases_renders_like_native_names():
     """An XML scene using <bsdf type="ashikhmin_shirley"> with Mitsuba-style names
-    (specular_reflectance, diffuse_reflectance) renders exactly the same image as
-    the same scene built with the native names rs / rd (same seed), and the image
-    is not trivial (sphere darker than the background, finite)."""
+    (int_ior / ext_ior 1.5 / 1, diffuse_reflectance) renders exactly the same image
+    as the same scene built with the native names rs = 0.04 (Schlick's F0 of
+    that interface) / rd (same seed), and the image is not trivial (sphere
+    darker than the background, finite)."""
     img_xml = np.array(mi.render(mi.load_string(XML), seed=0))
-    native = XML.replace('name="specular_reflectance"', 'name="rs"').replace(
-        'name="diffuse_reflectance"', 'name="rd"')
+    native = XML.replace('<float name="int_ior" value="1.5"/>', '<float name="rs" value="0.04"/>').replace(
+        '<float name="ext_ior" value="1.0"/>', '').replace('name="diffuse_reflectance"', 'name="rd"')
     img_native = np.array(mi.render(mi.load_string(native), seed=0))
     np.testing.assert_array_equal(img_xml, img_native)
     assert np.all(np.isfinite(img_xml))

@@ -185,8 +185,10 @@ def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels
     s_pts = [np.linspace(0.0, 1.0, 8 * refine + 1), 0.5 ** np.arange(1, pole_levels + 1),
              1.0 - 0.5 ** np.arange(1, HORIZON_LEVELS + 1)]
     p_centres = [(pi_, levels // 2), (pi_ + math.pi, levels // 2)]
-    if axes:      # as deep as the pole: Ward alpha_x = 1e-4, alpha_y = 0.2 is a band 1e-4 / t wide
-        p_centres += [(k * 0.5 * math.pi, pole_levels) for k in range(4)]
+    if axes:      # two levels deeper per floor refinement (so the refinement's error estimate sees
+        # the depth too), down to the pole's: Ward alpha_x = 1e-4, alpha_y = 0.2 is a band 1e-4 / t wide
+        deep = min(pole_levels, levels + 2 * int(round(math.log2(max(refine, 1)))))
+        p_centres += [(k * 0.5 * math.pi, deep) for k in range(4)]
     for p in peaks:
         p = np.asarray(p, dtype=np.float64)
         h = wi + p / max(np.linalg.norm(p), 1e-300)

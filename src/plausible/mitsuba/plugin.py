@@ -5,10 +5,16 @@ factory :func:`make_plugin_class`; what its methods do is written as functions
 of this module and of :mod:`plausible.mitsuba.props`, which can be read and
 tested alone:
 
-* :func:`bsdf_flags` -- Mitsuba's flags from what the model declares
-  (:attr:`plausible.bxdf.BxDF.LOBES`), the isotropy probe
+* :func:`bsdf_flags` -- Mitsuba's flags and components from what the model
+  declares (its lobes, :meth:`plausible.bxdf.BxDF.components`, one component
+  each; else :attr:`plausible.bxdf.BxDF.LOBES`), the isotropy probe
   :func:`plausible.analysis.is_isotropic`, the textures and the registry's
   ``reciprocal``;
+* the plugin's ``eval``, ``pdf`` and ``sample`` compose the lobes that the
+  ``BSDFContext`` enables (:func:`plausible.bxdf.mixture_f`, ``mixture_pdf``,
+  ``mixture_sample``); ``eval_diffuse_reflectance`` sums the diffuse lobes'
+  albedos; in polarized variants every value is a depolarizer;
+* :func:`mitsuba_progress` -- long computations at load reported in Mitsuba's log;
 * :func:`array_safe` -- can the model's sampler take a per-point value of a
   parameter (a dry run);
 * :func:`traversable` -- how each parameter appears in ``mi.traverse``
@@ -26,40 +32,67 @@ the new ones are refused.
 
 from __future__ import annotations
 
+import time
 from types import SimpleNamespace
 
 import numpy as np
 
-from .. import registry, vec
+from .. import progress, registry, vec
 from ..analysis import is_isotropic
+from ..bxdf import add_values, mixture_f, mixture_pdf, mixture_sample
 from . import props as P
 
 
-def bsdf_flags(mi, model, info, varying: bool):
-    """``(flags, sampled_type)`` of a model, as pbrt's ``BxDF::Flags()``.
+def lobe_kinds(lobe) -> frozenset:
+    """The kinds of a :class:`plausible.bxdf.Lobe` (``"diffuse"``, ``"glossy"``) as a set."""
+    return frozenset({lobe.kind}) if isinstance(lobe.kind, str) else frozenset(lobe.kind)
 
-    ``DiffuseReflection`` / ``GlossyReflection`` from ``model.LOBES``;
-    ``Anisotropic`` where :func:`~plausible.analysis.is_isotropic` says the value
-    changes as both directions rotate about the normal; ``SpatiallyVarying``
-    for varying textures; ``NonSymmetric`` for non-reciprocal models.  A sample
-    is typed ``GlossyReflection``, or ``DiffuseReflection`` for a purely
-    diffuse model.
+
+def bsdf_flags(mi, model, info, varying: bool):
+    """``(flags, components, sampled)`` of a model, as pbrt's ``BxDF::Flags()``
+    and Mitsuba's ``m_components``: one component per lobe of
+    :meth:`plausible.bxdf.BxDF.components`, in order.
+
+    A component is ``DiffuseReflection`` and/or ``GlossyReflection`` from its
+    lobe's kind, ``FrontSide``; ``Anisotropic`` (glossy components) where
+    :func:`~plausible.analysis.is_isotropic` says the value changes as both
+    directions rotate about the normal; ``SpatiallyVarying`` for varying
+    textures; ``NonSymmetric`` for non-reciprocal models.  ``flags`` is their
+    union; ``sampled[k]`` the type a sample of component ``k`` reports:
+    ``GlossyReflection``, or ``DiffuseReflection`` for a purely diffuse lobe.
     """
     F = mi.BSDFFlags
-    lobes = model.LOBES
-    flags = F.FrontSide
-    if "diffuse" in lobes:
-        flags |= F.DiffuseReflection
-    if "glossy" in lobes:
-        flags |= F.GlossyReflection
-    if not is_isotropic(model):
-        flags |= F.Anisotropic
+    common = F.FrontSide
     if varying:
-        flags |= F.SpatiallyVarying
+        common |= F.SpatiallyVarying
     if not info.reciprocal:
-        flags |= F.NonSymmetric
-    sampled = F.GlossyReflection if "glossy" in lobes else F.DiffuseReflection
-    return flags, sampled
+        common |= F.NonSymmetric
+    aniso = not is_isotropic(model)
+    components, sampled = [], []
+    for lobe in model.components():
+        kinds = lobe_kinds(lobe)
+        c = common
+        if "diffuse" in kinds:
+            c |= F.DiffuseReflection
+        if "glossy" in kinds:
+            c |= F.GlossyReflection
+            if aniso:
+                c |= F.Anisotropic
+        components.append(c)
+        sampled.append(F.GlossyReflection if "glossy" in kinds else F.DiffuseReflection)
+    flags = components[0]
+    for c in components[1:]:
+        flags |= c
+    return flags, components, sampled
+
+
+def lobe_types(mi, model) -> list:
+    """Per component of :func:`bsdf_flags`: the list of its lobe's types
+    (``DiffuseReflection``, ``GlossyReflection``), what ``BSDFContext.is_enabled``
+    is asked about."""
+    F = mi.BSDFFlags
+    table = {"diffuse": F.DiffuseReflection, "glossy": F.GlossyReflection}
+    return [[table[k] for k in sorted(lobe_kinds(lobe))] for lobe in model.components()]
 
 
 def array_safe(mi, model, name: str) -> bool:
@@ -134,6 +167,33 @@ def untraverse(prm, array, template):
     return [tuple(r) for r in a.reshape(shape)]
 
 
+def mitsuba_progress(mi, plugin: str):
+    """A :mod:`plausible.progress` factory that reports through Mitsuba's log: a
+    long computation at load (``pumped_up``'s albedo tables, 17.6 s cold for an
+    anisotropic base) is announced once at ``Warn`` (Mitsuba's default level
+    shows it) with where its result is cached, then every 10 % at ``Info``."""
+    from ..models.pumped_up import table_cache_dir
+
+    def factory(total: int, label: str = ""):
+        cache = table_cache_dir()
+        where = (f"cached on disk in {cache}; PLAUSIBLE_CACHE_DIR moves the cache, "
+                 f"PLAUSIBLE_CACHE_DIR='' turns it off" if cache else "the disk cache is off")
+        mi.Log(mi.LogLevel.Warn, f"{plugin}: computing {label or 'a table'} once "
+                                 f"({total} steps; {where})")
+        state = {"done": 0, "next": 0.1, "t0": time.perf_counter()}
+
+        def tick(n: int = 1) -> None:
+            state["done"] += n
+            frac = state["done"] / max(total, 1)
+            if frac >= state["next"] - 1e-12:
+                mi.Log(mi.LogLevel.Info, f"{plugin}: {label} {100 * frac:.0f} % "
+                                         f"({time.perf_counter() - state['t0']:.1f} s)")
+                state["next"] = (int(frac * 10 + 1e-9) + 1) / 10
+        return tick
+
+    return factory
+
+
 def channel_mean(c):
     """Mean over the channels of a Mitsuba Spectrum / Color3f (a Float)."""
     total = c[0]
@@ -159,11 +219,22 @@ class ParamState:
         material = props["material"] if "material" in props else None
         if material is not None:
             P.check_material(plugin, info, keys)
+        converted = P.converted_values(plugin, props, keys)
+        conv_keys = [k for k in keys if k in P.CONVERTED.get(plugin, {})]
+        keys = [k for k in keys if k not in conv_keys]
         self.given = P.given_names(plugin, info, keys, alias)
+        for name in converted:
+            if name in self.given:
+                raise ValueError(f"{plugin}: parameter {name!r} given twice (as {self.given[name]!r} "
+                                 f"and as {', '.join(conv_keys)}; converted names)")
+            self.given[name] = "+".join(conv_keys)
         self.textures, values = {}, {}
         for prm in info.params:
             key = self.given.get(prm.name)
-            v = prm.default if key is None else P.read_param(mi, prm, props, key, plugin)
+            if prm.name in converted:
+                v = prm.validate(converted[prm.name], plugin)
+            else:
+                v = prm.default if key is None else P.read_param(mi, prm, props, key, plugin)
             if isinstance(v, mi.Object):
                 self.textures[prm.name] = v
             elif isinstance(v, np.ndarray) and prm.kind == "color":
@@ -171,7 +242,7 @@ class ParamState:
             else:
                 values[prm.name] = v
         if material is not None:
-            self.textures.update(P.metal_textures(mi, material))
+            self.textures.update(P.metal_textures(mi, material, plugin))
             if "fresnel" in values and "fresnel" not in self.given and \
                     "conductor" in info.param("fresnel").choices:
                 values["fresnel"] = "conductor"
@@ -242,7 +313,8 @@ class ParamState:
                 no_mean.append(name)
                 continue
             consts[name] = min(max(mean, prm.lo), prm.hi)
-        model = self._make_without_means(consts, no_mean)
+        with progress.reporting(progress.ambient() or mitsuba_progress(self.mi, self.plugin)):
+            model = self._make_without_means(consts, no_mean)
         known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
         if known:
             base = {k: v for k, v in consts.items() if k not in known}
@@ -252,8 +324,23 @@ class ParamState:
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
         self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
         self._set_sampling()
-        self.m_flags, self.sampled_type = bsdf_flags(
+        self.m_flags, self.components, self.sampled_types = bsdf_flags(
             self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()))
+        self.lobe_types = lobe_types(self.mi, model)
+
+    def describe(self) -> str:
+        """The parameters as the scene gave them: numbers as values, a texture as
+        its class and name (``rd=BitmapTexture('wood.jpg')``), never its mean."""
+        from ..text import fmt
+
+        vals = self.values()
+        parts = []
+        for prm in self.info.params:
+            if prm.name in self.textures:
+                parts.append(f"{prm.name}={P.texture_label(self.textures[prm.name])}")
+            elif prm.name in vals and vals[prm.name] is not None:
+                parts.append(f"{prm.name}={fmt(vals[prm.name], other=repr)}")
+        return f"{type(self.model).__name__}({', '.join(parts)})"
 
     def _make_without_means(self, consts, no_mean):
         """The NumPy model, with each texture that has no mean (``mesh_attribute``)
@@ -375,7 +462,7 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
 
         def _set_flags(self):
             self.m_flags = self.state.m_flags
-            self.m_components = [self.state.m_flags]
+            self.m_components = list(self.state.components)
             self.anisotropic = bool(self.state.m_flags & mi.BSDFFlags.Anisotropic)
 
         @property
@@ -387,46 +474,96 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
         def _split(v):
             return (v.x, v.y, v.z)
 
-        def _value(self, ctx, si, wo_c):
-            """``f(light, view) cos(theta_o)``; plausible's ``wi`` (light) is Mitsuba's
-            ``wo`` in Radiance mode and ``si.wi`` in Importance mode."""
+        def _enabled(self, ctx):
+            """Per component: does ``ctx`` ask for it (``type_mask`` and ``component``,
+            Mitsuba's ``BSDFContext.is_enabled`` with the lobe's type, as
+            ``roughplastic`` asks; a lobe of both kinds where either is asked
+            for)?  A Python list (the context is not traced)."""
+            return [any(ctx.is_enabled(t, k) for t in kinds) for k, kinds in enumerate(self.state.lobe_types)]
+
+        @staticmethod
+        def _spectrum(v):
+            """A value of the model as Mitsuba's ``Spectrum``; in the polarized
+            variants a depolarizer (only ``M00``), as Mitsuba's ``diffuse`` and
+            ``roughplastic`` return: the models have no polarization."""
+            s = mi.UnpolarizedSpectrum(*v) if isinstance(v, tuple) else mi.UnpolarizedSpectrum(v)
+            return mi.depolarizer(s) if mi.is_polarized else s
+
+        def _value(self, ctx, si, wo_c, enabled):
+            """``f(light, view) cos(theta_o)`` of the enabled lobes (unpolarized);
+            plausible's ``wi`` (light) is Mitsuba's ``wo`` in Radiance mode and
+            ``si.wi`` in Importance mode."""
             ops = drjit_ops(mi.Float)
             wi_c = self._split(si.wi)
             light, view = (wi_c, wo_c) if ctx.mode == mi.TransportMode.Importance else (wo_c, wi_c)
-            f = self.model._f(ops, light, view, self.state.p(si))
-            f = mi.Spectrum(*f) if isinstance(f, tuple) else mi.Spectrum(f)
+            f = mixture_f(ops, self.model, light, view, self.state.p(si), enabled, components=True)
+            f = mi.UnpolarizedSpectrum(*f) if isinstance(f, tuple) else mi.UnpolarizedSpectrum(f)
             return f * dr.maximum(wo_c[2], 0.0)
 
         # -- the BSDF interface ------------------------------------------------------
         def eval(self, ctx, si, wo, active=True):
+            enabled = self._enabled(ctx)
+            if not any(enabled):
+                return self._spectrum(dr.zeros(mi.Float, dr.width(wo)))
             ok = active & (si.wi.z > 0) & (wo.z > 0)
-            return dr.select(ok, self._value(ctx, si, self._split(wo)), 0.0)
+            return self._spectrum(dr.select(ok, self._value(ctx, si, self._split(wo), enabled), 0.0))
+
+        def _pdf(self, ctx, si, wo_c, q, enabled):
+            ops = drjit_ops(mi.Float)
+            return mi.Float(mixture_pdf(ops, self.model, self._split(si.wi), wo_c, q, enabled, components=True))
 
         def pdf(self, ctx, si, wo, active=True):
-            ops = drjit_ops(mi.Float)
-            pdf = mi.Float(self.model._pdf(ops, self._split(si.wi), self._split(wo), self.state.q(si)))
+            enabled = self._enabled(ctx)
+            if not any(enabled):
+                return dr.zeros(mi.Float, dr.width(wo))
             ok = active & (si.wi.z > 0) & (wo.z > 0)
-            return dr.select(ok, pdf, 0.0)
+            return dr.select(ok, self._pdf(ctx, si, self._split(wo), self.state.q(si), enabled), 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
             ops = drjit_ops(mi.Float)
+            enabled = self._enabled(ctx)
+            bs = dr.zeros(mi.BSDFSample3f)
+            if not any(enabled):
+                return bs, self._spectrum(dr.zeros(mi.Float, dr.width(sample1)))
             q = self.state.q(si)
             wi_c = self._split(si.wi)
-            wo_c = self.model._sample(ops, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q)
+            wo_c, k = mixture_sample(ops, self.model, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q, enabled,
+                                     components=True)
             wo_c = vec.normalize(ops, tuple(mi.Float(c) for c in wo_c))
-            pdf = mi.Float(self.model._pdf(ops, wi_c, wo_c, q))
+            pdf = self._pdf(ctx, si, wo_c, q, enabled)
             ok = active & (pdf > 0) & (wo_c[2] > 0) & (si.wi.z > 0)
-            bs = dr.zeros(mi.BSDFSample3f)
             bs.wo = mi.Vector3f(*wo_c)
             bs.pdf = dr.select(ok, pdf, 0.0)
             bs.eta = 1.0
-            bs.sampled_type = mi.UInt32(int(self.state.sampled_type))
-            bs.sampled_component = mi.UInt32(0)
-            value = self._value(ctx, si, wo_c)
-            return bs, dr.select(ok, value / dr.select(ok, pdf, 1.0), 0.0)
+            bs.sampled_component = mi.UInt32(k)
+            types = self.state.sampled_types
+            sampled = mi.UInt32(int(types[0]))
+            for j in range(1, len(types)):
+                sampled = dr.select(bs.sampled_component == j, mi.UInt32(int(types[j])), sampled)
+            bs.sampled_type = sampled
+            value = self._value(ctx, si, wo_c, enabled)
+            return bs, self._spectrum(dr.select(ok, value / dr.select(ok, pdf, 1.0), 0.0))
+
+        def eval_diffuse_reflectance(self, si, active=True):
+            """The albedo of the diffuse lobes at ``si.wi`` (their declared
+            :attr:`plausible.bxdf.Lobe.albedo`: ``rd``, ``kd``; Ashikhmin-Shirley's
+            coupled term ``rd (1 - rs) (1 - (1 - cos/2)^5)``), as ``diffuse`` and
+            ``roughplastic`` return their reflectance (the ``aov`` integrator's
+            ``albedo``).  A model without a diffuse lobe: Mitsuba's default,
+            ``pi eval(wo = n)``, as ``roughconductor``."""
+            ops = drjit_ops(mi.Float)
+            albedos = [lb.albedo for lb in self.model.components() if lb.albedo is not None]
+            if not albedos:
+                n = mi.Vector3f(0.0, 0.0, 1.0)
+                return self.eval(mi.BSDFContext(), si, n, active) * dr.pi
+            p = self.state.p(si)
+            wi_c = self._split(si.wi)
+            total = add_values([a(ops, wi_c, p) for a in albedos])
+            value = mi.UnpolarizedSpectrum(*total) if isinstance(total, tuple) else mi.UnpolarizedSpectrum(total)
+            return self._spectrum(dr.select(active & (si.wi.z > 0), value, 0.0))
 
         # -- parameters ---------------------------------------------------------------
         def traverse(self, callback):
@@ -442,7 +579,7 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
             self._set_flags()
 
         def to_string(self):
-            return f"{plugin}[plausible model {model_name!r}: {self.model!r}]"
+            return f"{plugin}[plausible model {model_name!r}: {self.state.describe()}]"
 
     PlausibleBSDF.__name__ = "Plausible_" + plugin
     PlausibleBSDF.__qualname__ = PlausibleBSDF.__name__
@@ -484,5 +621,5 @@ def make_merl_class():
     return MerlBSDF
 
 
-__all__ = ["make_plugin_class", "make_merl_class", "bsdf_flags", "array_safe", "traversable", "untraverse",
-           "channel_mean", "ParamState"]
+__all__ = ["make_plugin_class", "make_merl_class", "bsdf_flags", "lobe_types", "lobe_kinds", "array_safe", "traversable", "untraverse",
+           "channel_mean", "mitsuba_progress", "ParamState"]

@@ -31,21 +31,92 @@ from ..params import parse_groups
 
 #: Mitsuba-style parameter names accepted by every plugin whose model has one of
 #: the candidate parameters (first candidate present wins).
+#: ``specular_reflectance`` goes only to a scale of the specular lobe (``ks``),
+#: what it is in Mitsuba (a factor on the lobe, default 1); never to an ``rs``
+#: that is Schlick's F0 (:data:`F0_PARAMS`, see :func:`given_names`).
 COMMON_ALIASES = {
     "diffuse_reflectance": ("kd", "rd"),
-    "specular_reflectance": ("ks", "rs"),
+    "specular_reflectance": ("ks",),
     "exponent": ("n",),
-    "reflectance": ("rd", "kd", "ks", "rs"),
+    "reflectance": ("rd", "kd", "ks"),
 }
 
 #: Per-plugin aliases (added to :data:`COMMON_ALIASES`).  Ward's ``alpha`` is
 #: Mitsuba's isotropic roughness: it sets ``alpha_x`` and ``alpha_y`` together
-#: (:data:`BOTH`).
+#: (:data:`BOTH`).  Ward's ``rs`` scales its lobe, as Mitsuba 0.5's ``ward``.
 PLUGIN_ALIASES = {
-    "ashikhmin_shirley": {"specular_reflectance": ("rs",), "diffuse_reflectance": ("rd",)},
-    "ward": {"alpha_u": ("alpha_x",), "alpha_v": ("alpha_y",), "alpha": (("alpha_x", "alpha_y"),)},
+    "ashikhmin_shirley": {"diffuse_reflectance": ("rd",)},
+    "ward": {"alpha_u": ("alpha_x",), "alpha_v": ("alpha_y",), "alpha": (("alpha_x", "alpha_y"),),
+             "specular_reflectance": ("rs",)},
     "cook_torrance": {"alpha": ("m",), "roughness": ("m",)},
 }
+
+#: Plugins whose ``rs`` is Schlick's F0 (the reflectance at normal incidence),
+#: not a factor: Mitsuba's ``specular_reflectance`` is refused there with the
+#: conversion, and ``int_ior`` / ``ext_ior`` set ``rs`` (:data:`CONVERTED`).
+F0_PARAMS = {"ashikhmin_shirley": "rs", "ashikhmin_shirley_specular": "rs",
+             "ashikhmin_shirley_diffuse": "rs", "schlick": "rs"}
+
+
+def ior_f0(int_ior: float, ext_ior: float) -> float:
+    """Schlick's F0 of a dielectric interface, ``((n_int - n_ext) / (n_int + n_ext))^2``
+    (the Fresnel reflectance at normal incidence; Schlick 1994 eq. 24)."""
+    return ((int_ior - ext_ior) / (int_ior + ext_ior)) ** 2
+
+
+def blinn_exponent(alpha: float) -> float:
+    """The Blinn-Phong exponent of a Beckmann roughness: ``n = 2 / alpha^2 - 2``
+    (Walter et al. 2007, "Microfacet models for refraction", eq. after 33): the
+    two half-vector densities agree near the peak.  An approximation; exact only
+    in the limit of small ``alpha``."""
+    return max(2.0 / (alpha * alpha) - 2.0, 0.0)
+
+
+#: Mitsuba's names that need a conversion: ``{plugin: {property: (parameters,
+#: function of the property's value, range text)}}``.  ``int_ior``/``ext_ior``
+#: (defaults as Mitsuba's: 1.49 polypropylene, 1.000277 air) set Schlick's F0;
+#: ``alpha``/``alpha_u``/``alpha_v`` set Ashikhmin-Shirley's exponents by
+#: :func:`blinn_exponent`.
+MITSUBA_IOR = (1.49, 1.000277)
+CONVERTED = {
+    **{p: {"int_ior": (("rs",), None, "a number > 0"), "ext_ior": (("rs",), None, "a number > 0")}
+       for p in F0_PARAMS},
+    "ashikhmin_shirley": {"int_ior": (("rs",), None, "a number > 0"), "ext_ior": (("rs",), None, "a number > 0"),
+                          "alpha": (("nu", "nv"), blinn_exponent, "a number in (0, 1]"),
+                          "alpha_u": (("nu",), blinn_exponent, "a number in (0, 1]"),
+                          "alpha_v": (("nv",), blinn_exponent, "a number in (0, 1]")},
+    "ashikhmin_shirley_specular": {"int_ior": (("rs",), None, "a number > 0"),
+                                   "ext_ior": (("rs",), None, "a number > 0"),
+                                   "alpha": (("nu", "nv"), blinn_exponent, "a number in (0, 1]"),
+                                   "alpha_u": (("nu",), blinn_exponent, "a number in (0, 1]"),
+                                   "alpha_v": (("nv",), blinn_exponent, "a number in (0, 1]")},
+    "reciprocal_blinn": {"alpha": (("n",), blinn_exponent, "a number in (0, 1]")},
+}
+
+
+def converted_values(plugin: str, props, keys) -> dict:
+    """``{parameter: value}`` from the properties that need a conversion
+    (:data:`CONVERTED`); ValueError for a texture or an out-of-range number."""
+    table = CONVERTED.get(plugin, {})
+    out = {}
+    given = [k for k in keys if k in table]
+    for key in given:
+        raw = props[key]
+        lo_ok = isinstance(raw, (int, float)) and not isinstance(raw, bool) and raw > 0
+        if not lo_ok or (key.startswith("alpha") and raw > 1.0):
+            raise ValueError(f"{plugin}: parameter {key!r} must be {table[key][2]} (converted, "
+                             f"see docs/mitsuba.md), got {raw!r}")
+    ior = [k for k in given if k in ("int_ior", "ext_ior")]
+    if ior:
+        i = float(props["int_ior"]) if "int_ior" in ior else MITSUBA_IOR[0]
+        e = float(props["ext_ior"]) if "ext_ior" in ior else MITSUBA_IOR[1]
+        out["rs"] = ior_f0(i, e)
+    for key in given:
+        targets, fn, _ = table[key]
+        if fn is not None:
+            for t in targets:
+                out[t] = fn(float(props[key]))
+    return out
 
 #: Texture classes whose every value is a texel of their data (bilinear
 #: interpolation stays within the texels' range): their range is checked at load.
@@ -86,6 +157,12 @@ def given_names(plugin: str, info, keys, alias: dict) -> dict:
         if key == "material":
             continue
         target = alias.get(key, key)
+        if key == "specular_reflectance" and plugin in F0_PARAMS:
+            raise ValueError(f"{plugin}: 'specular_reflectance' is Mitsuba's factor on the Fresnel "
+                             f"term (default 1); this model's {F0_PARAMS[plugin]!r} is Schlick's F0, "
+                             f"the reflectance at normal incidence (default 0.05; 0.04 for glass). "
+                             f"Give {F0_PARAMS[plugin]!r}, or 'int_ior'/'ext_ior' (F0 = ((n1 - n2) / "
+                             f"(n1 + n2))^2)")
         for t in (target if isinstance(target, tuple) else (target,)):
             if t not in names:
                 raise ValueError(f"{plugin}: unknown parameter {key!r}; allowed: "
@@ -162,26 +239,49 @@ def read_param(mi, prm, props, key, plugin):
     return read_texture(mi, prm, props, key, raw)
 
 
-def metal_textures(mi, material: str) -> dict:
-    """``{"eta": texture, "k": texture}`` of a metal from :mod:`plausible.spectra`.
+#: The conductor names of Mitsuba 3's ``conductor`` / ``roughconductor``
+#: ``material`` (its ``data/ior`` tables; each one loads in Mitsuba 3.9,
+#: ``tests/mitsuba/test_conventions.py``); ``"none"`` (a perfect mirror) aside.
+MITSUBA_CONDUCTORS = (
+    "a-C", "Ag", "Al", "AlAs", "AlAs_palik", "AlSb", "AlSb_palik", "Au", "Be", "Be_palik", "Cr", "CsI",
+    "CsI_palik", "Cu", "Cu_palik", "Cu2O", "Cu2O_palik", "CuO", "CuO_palik", "d-C", "d-C_palik", "Hg",
+    "Hg_palik", "HgTe", "HgTe_palik", "Ir", "Ir_palik", "K", "K_palik", "Li", "Li_palik", "MgO",
+    "MgO_palik", "Mo", "Mo_palik", "Na_palik", "Nb", "Nb_palik", "Ni_palik", "Rh", "Rh_palik", "Se",
+    "Se_palik", "SiC", "SiC_palik", "SnTe", "SnTe_palik", "Ta", "Ta_palik", "Te", "Te_palik", "ThF4",
+    "ThF4_palik", "TiC", "TiC_palik", "TiN", "TiN_palik", "TiO2", "TiO2_palik", "VC", "VC_palik",
+    "V_palik", "VN", "VN_palik", "W")
 
-    Spectral variants: Mitsuba ``irregular`` spectra on the table's wavelengths
-    (the Fresnel term then varies per sampled wavelength).  RGB variants: the
-    D65-weighted linear sRGB reduction of ``n(lambda)`` and ``k(lambda)``
-    (:func:`plausible.spectra.spectrum_to_xyz`, :func:`xyz_to_linear_srgb`).
-    """
+
+def conductor_name(plugin: str, material) -> str:
+    """Mitsuba's name of a conductor: one of :data:`MITSUBA_CONDUCTORS`, or an
+    English name of :data:`plausible.spectra.METALS` (``gold`` -> ``Au``)."""
     from .. import spectra
 
-    wl = np.arange(360.0, 831.0, 5.0)
-    n, k = spectra.metal_nk(material, wl)
+    name = spectra.METALS.get(material, material) if isinstance(material, str) else material
+    if name not in MITSUBA_CONDUCTORS:
+        raise ValueError(f"{plugin}: parameter 'material' must be one of Mitsuba's conductors "
+                         f"({', '.join(MITSUBA_CONDUCTORS)}) or {', '.join(sorted(set(spectra.METALS) - set(MITSUBA_CONDUCTORS)))}, "
+                         f"got {material!r}")
+    return name
+
+
+def metal_textures(mi, material: str, plugin: str = "plugin") -> dict:
+    """``{"eta": texture, "k": texture}`` of a conductor, read from Mitsuba itself
+    (a ``conductor`` with that ``material``, through ``mi.traverse``), so that the
+    plugin's metal is Mitsuba's: its ``irregular`` spectra in spectral variants,
+    its RGB reduction of them in RGB and monochrome variants."""
+    params = mi.traverse(mi.load_dict({"type": "conductor", "material": conductor_name(plugin, material)}))
     out = {}
-    for name, vals in (("eta", n), ("k", k)):
+    for name in ("eta", "k"):
         if mi.is_spectral:
+            wl = np.array(params[f"{name}.wavelengths"], dtype=np.float64).ravel()
+            vals = np.array(params[f"{name}.values"], dtype=np.float64).ravel()
             out[name] = mi.load_dict({"type": "irregular",
-                                      "wavelengths": ", ".join(f"{x:g}" for x in wl),
-                                      "values": ", ".join(f"{x:.6g}" for x in vals)})
+                                      "wavelengths": ", ".join(f"{x:.9g}" for x in wl),
+                                      "values": ", ".join(f"{x:.9g}" for x in vals)})
         else:
-            out[name] = srgb(mi, spectra.xyz_to_linear_srgb(spectra.spectrum_to_xyz(wl, vals)), True)
+            v = np.array(params[f"{name}.value"], dtype=np.float64).ravel()
+            out[name] = srgb(mi, np.broadcast_to(v, (3,)) if v.size == 1 else v, True)
     return out
 
 
@@ -195,6 +295,26 @@ def texture_class(tex) -> str:
         return repr(tex).split("[", 1)[0].strip()
     except RuntimeError:
         return ""
+
+
+def texture_label(tex) -> str:
+    """A short printed form of a texture: its class and, where it has one, its
+    name (a bitmap's file, a mesh attribute's name), e.g. ``BitmapTexture('wood.jpg')``;
+    a constant colour as its value."""
+    cls = texture_class(tex) or type(tex).__name__
+    try:
+        text = repr(tex)
+    except RuntimeError:
+        text = ""
+    constant = cls in ("SRGBReflectanceSpectrum", "UniformSpectrum", "D65Spectrum")
+    for key in (("value = ", "value=") if constant else ("name = ",)):
+        at = text.find(key)
+        if at >= 0:
+            val = text[at + len(key):].split("\n", 1)[0].strip().rstrip(",").strip('"')
+            if key == "name = ":
+                return f"{cls}({val!r})"
+            return f"{cls}([{val.strip('[]')}])"
+    return cls
 
 
 def texture_texels(mi, tex):
@@ -395,7 +515,7 @@ def _show(v) -> str:
 
 
 __all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", "given_names",
-           "check_material", "read_param", "read_model_spec", "read_structured", "read_choice",
+           "check_material", "conductor_name", "MITSUBA_CONDUCTORS", "read_param", "read_model_spec", "read_structured", "read_choice",
            "read_number", "read_texture", "metal_textures", "texture_texels",
            "texture_range_known", "texture_mean", "texture_varies", "srgb_to_linear",
            "bitmap_values", "bitmap_is_raw", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",

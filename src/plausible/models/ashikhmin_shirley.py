@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
 from ..fresnel import schlick
 from ..ops import PI
 from ..params import Param
@@ -182,6 +182,23 @@ def diffuse_pdf(ops, wi, wo):
     return ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
 
 
+def diffuse_sample(ops, wi, u, q):
+    """Cosine-weighted, the diffuse term's sampler (journal Sec. 3)."""
+    return warps.cosine_hemisphere(ops, u[1], u[2])
+
+
+#: The two terms as components (:class:`plausible.bxdf.Lobe`).
+SPECULAR_LOBE = Lobe("glossy",
+                     lambda ops, wi, wo, p: specular(ops, wi, wo, p.nu, p.nv, p.rs),
+                     lambda ops, wi, wo, q: specular_pdf(ops, wi, wo, q.nu, q.nv),
+                     lambda ops, wi, u, q: specular_sample(ops, wi, q.nu, q.nv, u[1], u[2]))
+DIFFUSE_LOBE = Lobe("diffuse",
+                    lambda ops, wi, wo, p: diffuse(ops, wi, wo, p.rs, p.rd),
+                    lambda ops, wi, wo, q: diffuse_pdf(ops, wi, wo),
+                    diffuse_sample,
+                    lambda ops, wi, p: diffuse_albedo(ops.maximum(wi[2], 0.0), p.rs, p.rd))
+
+
 # -- the models -------------------------------------------------------------------
 
 @register("ashikhmin-shirley",
@@ -213,15 +230,19 @@ class AshikhminShirley(BxDF):
     def _f(self, ops, wi, wo, p):
         return specular(ops, wi, wo, p.nu, p.nv, p.rs) + diffuse(ops, wi, wo, p.rs, p.rd)
 
+    def lobes(self):
+        """The specular lobe (journal eq. 4), then the coupled diffuse term (eq. 5),
+        whose albedo is :func:`diffuse_albedo` at ``wi``."""
+        return (SPECULAR_LOBE, DIFFUSE_LOBE)
+
+    def lobe_weights(self, ops, wi, q):
+        return self.spec_probability(ops, wi, q), self.diffuse_probability(ops, wi, q)
+
     def _pdf(self, ops, wi, wo, q):
-        ps, pd = self.spec_probability(ops, wi, q), self.diffuse_probability(ops, wi, q)
-        return ps * specular_pdf(ops, wi, wo, q.nu, q.nv) + pd * diffuse_pdf(ops, wi, wo)
+        return mixture_pdf(ops, self, wi, wo, q)
 
     def _sample(self, ops, wi, u, q):
-        ps = self.spec_probability(ops, wi, q)
-        spec = specular_sample(ops, wi, q.nu, q.nv, u[1], u[2])
-        diff = warps.cosine_hemisphere(ops, u[1], u[2])
-        return warps.mixture(ops, u[0] < ps, spec, diff)
+        return mixture_sample(ops, self, wi, u, q)[0]
 
 
 @register("ashikhmin-shirley-specular",
@@ -265,4 +286,7 @@ class AshikhminShirleyDiffuse(BxDF):
         return diffuse_pdf(ops, wi, wo)
 
     def _sample(self, ops, wi, u, q):
-        return warps.cosine_hemisphere(ops, u[1], u[2])
+        return diffuse_sample(ops, wi, u, q)
+
+    def lobes(self):
+        return (DIFFUSE_LOBE,)

@@ -63,7 +63,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above
 from ..ops import INV_PI, PI
 from ..params import Param, parse_groups
 from ..registry import register
@@ -264,6 +264,26 @@ def lobe_pdf(ops, wi, wo, lobe):
     return ops.where(ok, warps.power_cosine_lobe_pdf(ops, lobe[3], cos), 0.0)
 
 
+def _lobe_f(k):
+    """``f`` of the ``k``-th (normalised) lobe alone."""
+    return lambda ops, wi, wo, p: ops.where(above(ops, wi, wo),
+                                            lobe_value(ops, wi, wo, normalised_lobes(p.lobes)[k]), 0.0)
+
+
+def _lobe_pdf(k):
+    def pdf(ops, wi, wo, q):
+        return ops.where(above(ops, wi, wo), lobe_pdf(ops, wi, wo, normalised_lobes(q.lobes)[k]), 0.0)
+    return pdf
+
+
+def _lobe_sample(k):
+    def sample(ops, wi, u, q):
+        lobe = normalised_lobes(q.lobes)[k]
+        d = lobe_axis_and_log_estimate(ops, wi, lobe)[0]
+        return warps.power_cosine_lobe_about(ops, d, lobe[3], u[1], u[2])
+    return sample
+
+
 @register("lafortune",
           "Lafortune et al. 1997 generalized cosine lobes: f = rd/pi + sum rho (cx Lx Vx + "
           "cy Ly Vy + cz Lz Vz)^n; energy bound rd + sum rho cmax^n 2pi/(n+2) <= 1 enforced.",
@@ -301,6 +321,24 @@ class Lafortune(BxDF):
 
     def _f(self, ops, wi, wo, p):
         return lafortune(ops, wi, wo, p.rd, normalised_lobes(p.lobes))
+
+    def lobes(self):
+        """The Lambertian term (albedo ``rd``), then each generalized cosine lobe
+        (normalised, :func:`normalised_lobes`), sampled as a ``cos^n`` lobe about
+        its axis ``C wi / |C wi|``."""
+        out = [Lobe("diffuse", lambda ops, wi, wo, p: ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0),
+                    lambda ops, wi, wo, q: ops.where(above(ops, wi, wo),
+                                                     warps.cosine_hemisphere_pdf(ops, wo), 0.0),
+                    lambda ops, wi, u, q: warps.cosine_hemisphere(ops, u[1], u[2]),
+                    lambda ops, wi, p: p.rd)]
+        for k in range(len(normalised_lobes(self.params["lobes"]))):
+            out.append(Lobe("glossy", _lobe_f(k), _lobe_pdf(k), _lobe_sample(k)))
+        return tuple(out)
+
+    def lobe_weights(self, ops, wi, q):
+        """The diffuse term's and each lobe's mixture weight (:meth:`_weights`)."""
+        _, w_d, est, _ = self._weights(ops, wi, q)
+        return (w_d,) + tuple(est)
 
     def _weights(self, ops, wi, q):
         """Axes, the mixture weights of the diffuse term and of each lobe (relative

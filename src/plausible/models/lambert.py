@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .. import warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above
 from ..ops import INV_PI
 from ..params import Param
 from ..registry import register
@@ -30,3 +30,7 @@ class Lambertian(BxDF):
 
     def _sample(self, ops, wi, u, q):
         return warps.cosine_hemisphere(ops, u[1], u[2])
+
+    def lobes(self):
+        """One diffuse lobe whose albedo is ``rd``."""
+        return (Lobe("diffuse", self._f, self._pdf, self._sample, lambda ops, wi, p: p.rd),)

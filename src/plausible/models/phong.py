@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -96,6 +96,16 @@ def diffuse_pdf(ops, wi, wo):
     return ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
 
 
+def modified_phong_diffuse(ops, wi, wo, p):
+    """The Lambertian term ``kd / pi`` of Modified Phong."""
+    return ops.where(above(ops, wi, wo), p.kd * INV_PI, 0.0)
+
+
+def modified_phong_glossy(ops, wi, wo, p):
+    """The lobe ``ks (n + 2) / (2 pi) cos^n(alpha)`` of Modified Phong."""
+    return ops.where(above(ops, wi, wo), p.ks * phong_norm(p.n) * phong_lobe(ops, wi, wo, p.n), 0.0)
+
+
 @register("modified-phong",
           "Modified Phong (Lafortune & Willems 1994; Mitsuba 0.5 'phong'): "
           "f = kd/pi + ks (n+2)/(2 pi) cos^n(alpha).",
@@ -135,18 +145,25 @@ class ModifiedPhong(BxDF):
         return ops.where(pos, q.ks / ops.where(pos, s, 1.0), 0.5)
 
     def _f(self, ops, wi, wo, p):
-        val = p.kd * INV_PI + p.ks * phong_norm(p.n) * phong_lobe(ops, wi, wo, p.n)
-        return ops.where(above(ops, wi, wo), val, 0.0)
+        return modified_phong_diffuse(ops, wi, wo, p) + modified_phong_glossy(ops, wi, wo, p)
+
+    def lobes(self):
+        """The ``cos^n`` lobe, then the Lambertian term (albedo ``kd``)."""
+        return (Lobe("glossy", modified_phong_glossy, lambda ops, wi, wo, q: lobe_pdf(ops, wi, wo, q.n),
+                     lambda ops, wi, u, q: phong_sample(ops, wi, q.n, u[1], u[2])),
+                Lobe("diffuse", modified_phong_diffuse, lambda ops, wi, wo, q: diffuse_pdf(ops, wi, wo),
+                     lambda ops, wi, u, q: warps.cosine_hemisphere(ops, u[1], u[2]),
+                     lambda ops, wi, p: p.kd))
+
+    def lobe_weights(self, ops, wi, q):
+        ps = self.spec_probability(ops, q)
+        return ps, 1.0 - ps
 
     def _pdf(self, ops, wi, wo, q):
-        ps = self.spec_probability(ops, q)
-        return ps * lobe_pdf(ops, wi, wo, q.n) + (1.0 - ps) * diffuse_pdf(ops, wi, wo)
+        return mixture_pdf(ops, self, wi, wo, q)
 
     def _sample(self, ops, wi, u, q):
-        ps = self.spec_probability(ops, q)
-        spec = phong_sample(ops, wi, q.n, u[1], u[2])
-        diff = warps.cosine_hemisphere(ops, u[1], u[2])
-        return warps.mixture(ops, u[0] < ps, spec, diff)
+        return mixture_sample(ops, self, wi, u, q)[0]
 
 
 class _PhongLobeModel(BxDF):

@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import fresnel, vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -146,6 +146,14 @@ def schlick_specular(ops, wi, wo, r, p, rs, form):
     return ops.where(ok, val, 0.0)
 
 
+def _schlick_glossy(ops, wi, wo, p):
+    return ops.where(above(ops, wi, wo), schlick_specular(ops, wi, wo, p.r, p.p, p.rs, p.azimuth), 0.0)
+
+
+def _schlick_diffuse(ops, wi, wo, p):
+    return ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
+
+
 @register("schlick",
           "Schlick 1994 inexpensive BRDF, single slope: f = rd/pi + F(u) G(v) G(v') Z(t) A(w) / "
           "(4 pi v v'); roughness r, isotropy p.",
@@ -174,34 +182,30 @@ class Schlick(BxDF):
     )
 
     def _f(self, ops, wi, wo, p):
-        spec = schlick_specular(ops, wi, wo, p.r, p.p, p.rs, p.azimuth)
-        return ops.where(above(ops, wi, wo), p.rd * INV_PI + spec, 0.0)
+        return _schlick_glossy(ops, wi, wo, p) + _schlick_diffuse(ops, wi, wo, p)
 
-    def _spec_probability(self, ops, wi, q):
-        fs = fresnel.schlick(ops, wi[2], q.rs)
-        tot = fs + q.rd
-        pos = tot > 0
-        return ops.where(pos, fs / ops.where(pos, tot, 1.0), 0.5)
+    def lobes(self):
+        """The specular term (half vector from ``Z(t) t A(w) / pi``, reflected), then
+        the Lambertian term (albedo ``rd``)."""
+        return (Lobe("glossy", _schlick_glossy,
+                     lambda ops, wi, wo, q: warps.reflected_pdf(
+                         ops, wi, wo, lambda h: half_vector_pdf(ops, h, q.r, q.p)),
+                     lambda ops, wi, u, q: vec.reflect(wi, sample_half_vector(ops, q.r, q.p, u[1], u[2]))),
+                Lobe("diffuse", _schlick_diffuse,
+                     lambda ops, wi, wo, q: ops.where(above(ops, wi, wo),
+                                                      warps.cosine_hemisphere_pdf(ops, wo), 0.0),
+                     lambda ops, wi, u, q: warps.cosine_hemisphere(ops, u[1], u[2]),
+                     lambda ops, wi, p: p.rd))
 
-    def _diffuse_probability(self, ops, wi, q):
-        # rd / (F + rd) as its own quotient, not 1 - ps (which rounds to 0 in float32
-        # for rd < 6e-8 while the diffuse term stays)
-        tot = fresnel.schlick(ops, wi[2], q.rs) + q.rd
-        pos = tot > 0
-        return ops.where(pos, q.rd / ops.where(pos, tot, 1.0), 0.5)
+    def lobe_weights(self, ops, wi, q):
+        """``F(n.wi)`` and ``rd`` (channel means): ``ps = F / (F + rd)``."""
+        return fresnel.schlick(ops, wi[2], q.rs), q.rd
 
     def _pdf(self, ops, wi, wo, q):
-        ps = self._spec_probability(ops, wi, q)
-        spec = warps.reflected_pdf(ops, wi, wo, lambda h: half_vector_pdf(ops, h, q.r, q.p))
-        diff = ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
-        return ps * spec + self._diffuse_probability(ops, wi, q) * diff
+        return mixture_pdf(ops, self, wi, wo, q)
 
     def _sample(self, ops, wi, u, q):
-        ps = self._spec_probability(ops, wi, q)
-        h = sample_half_vector(ops, q.r, q.p, u[1], u[2])
-        spec = vec.reflect(wi, h)
-        diff = warps.cosine_hemisphere(ops, u[1], u[2])
-        return warps.mixture(ops, u[0] < ps, spec, diff)
+        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi: np.ndarray) -> list:
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]

@@ -35,7 +35,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .. import warps
-from ..bxdf import BxDF
+from ..bxdf import BxDF, Lobe, mixture_probabilities
 from ..kernel_params import is_data
 
 #: Cosines of the incidences at which a part's albedo is estimated.
@@ -194,6 +194,27 @@ class Sum(BxDF):
             start = start + pk
         return out
 
+    def lobes(self):
+        """Every part's components (:meth:`BxDF.components`), each scaled by its
+        part's scale and bound to its part's parameters, part after part (the
+        order of :meth:`_sample`'s intervals)."""
+        out = []
+        for m, mp, mq, s in zip(self.parts, self._part_p, self._part_q, self._scale_p):
+            for lobe in m.components():
+                out.append(Lobe(lobe.kind, _scaled(lambda ops, wi, wo, p, f=lobe.f, mp=mp: f(ops, wi, wo, mp), s),
+                                lambda ops, wi, wo, q, g=lobe.pdf, mq=mq: g(ops, wi, wo, mq),
+                                lambda ops, wi, u, q, g=lobe.sample, mq=mq: g(ops, wi, u, mq),
+                                None if lobe.albedo is None else
+                                _scaled(lambda ops, wi, p, a=lobe.albedo, mp=mp: a(ops, wi, mp), s)))
+        return tuple(out)
+
+    def lobe_weights(self, ops, wi, q):
+        """Part ``k``'s probability times its own lobes' shares."""
+        out = []
+        for m, mq, pk in zip(self.parts, self._part_q, self.probabilities):
+            out.extend(pk * w for w in mixture_probabilities(ops, m.component_weights(ops, wi, mq)))
+        return tuple(out)
+
     def peak_directions(self, wi):
         out = []
         for m in self.parts:
@@ -205,6 +226,13 @@ class Sum(BxDF):
                           for m, s in zip(self.parts, self.scales))
         head = f"{self.label}: " if self.label else ""
         return f"Sum({head}[{parts}])"
+
+
+def _scaled(fn, s):
+    """``fn`` times the part's scale ``s`` (None: 1)."""
+    if s is None:
+        return fn
+    return lambda *args: fn(*args) * s
 
 
 def _fmt_scale(s):

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -69,6 +69,14 @@ def ward_specular(ops, wi, wo, ax, ay, variant):
     else:
         raise ValueError(f"Ward: parameter 'variant' must be one of {VARIANTS}, got {variant!r}")
     return ops.where(ok, val, 0.0)
+
+
+def _ward_diffuse(ops, wi, wo, p):
+    return ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
+
+
+def _ward_glossy(ops, wi, wo, p):
+    return p.rs * ward_specular(ops, wi, wo, p.alpha_x, p.alpha_y, p.variant)
 
 
 @register("ward",
@@ -112,21 +120,30 @@ class Ward(BxDF):
         return ops.where(pos, q.rs / ops.where(pos, s, 1.0), 0.5)
 
     def _f(self, ops, wi, wo, p):
-        diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
-        return diffuse + p.rs * ward_specular(ops, wi, wo, p.alpha_x, p.alpha_y, p.variant)
+        return _ward_diffuse(ops, wi, wo, p) + _ward_glossy(ops, wi, wo, p)
+
+    def lobes(self):
+        """The Gaussian lobe (sampled through the Beckmann half vector), then the
+        Lambertian term (albedo ``rd``)."""
+        return (Lobe("glossy", _ward_glossy,
+                     lambda ops, wi, wo, q: warps.beckmann_reflected_pdf(ops, wi, wo, q.alpha_x, q.alpha_y),
+                     lambda ops, wi, u, q: vec.reflect(
+                         wi, warps.beckmann_half_vector(ops, q.alpha_x, q.alpha_y, u[1], u[2]))),
+                Lobe("diffuse", _ward_diffuse,
+                     lambda ops, wi, wo, q: ops.where(above(ops, wi, wo),
+                                                      warps.cosine_hemisphere_pdf(ops, wo), 0.0),
+                     lambda ops, wi, u, q: warps.cosine_hemisphere(ops, u[1], u[2]),
+                     lambda ops, wi, p: p.rd))
+
+    def lobe_weights(self, ops, wi, q):
+        ps = self.spec_probability(ops, q)
+        return ps, 1.0 - ps
 
     def _pdf(self, ops, wi, wo, q):
-        ps = self.spec_probability(ops, q)
-        spec = warps.beckmann_reflected_pdf(ops, wi, wo, q.alpha_x, q.alpha_y)
-        diff = ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0)
-        return ps * spec + (1.0 - ps) * diff
+        return mixture_pdf(ops, self, wi, wo, q)
 
     def _sample(self, ops, wi, u, q):
-        ps = self.spec_probability(ops, q)
-        h = warps.beckmann_half_vector(ops, q.alpha_x, q.alpha_y, u[1], u[2])
-        spec = vec.reflect(wi, h)
-        diff = warps.cosine_hemisphere(ops, u[1], u[2])
-        return warps.mixture(ops, u[0] < ps, spec, diff)
+        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi):
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]
