@@ -57,7 +57,7 @@ import math
 import numpy as np
 
 from .. import fresnel, special, vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -358,10 +358,27 @@ class HeTorrance(BxDF):
         return (kernel_params.default_structure(self), exact_terms(self.bound(self.p) or 0.0),
                 float(np.max(self.params["wavelength"])))
 
-    def _f(self, ops, wi, wo, p):
-        diffuse = ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
+    def _glossy(self, ops, wi, wo, p):
+        """The directional-diffuse term (eq. 76)."""
         lam_ref = float(np.max(self.params["wavelength"]))
-        return directional_diffuse(ops, wi, wo, p, self.bound(p), lam_ref) + diffuse
+        return directional_diffuse(ops, wi, wo, p, self.bound(p), lam_ref)
+
+    @staticmethod
+    def _diffuse(ops, wi, wo, p):
+        """The uniform diffuse term ``rd / pi``."""
+        return ops.where(above(ops, wi, wo), p.rd * INV_PI, 0.0)
+
+    def _f(self, ops, wi, wo, p):
+        return self._glossy(ops, wi, wo, p) + self._diffuse(ops, wi, wo, p)
+
+    def lobes(self):
+        """The directional-diffuse lobe (sampled by the two Gaussians of ``d``), then
+        the uniform diffuse one (cosine-weighted, albedo ``rd``)."""
+        return (Lobe("glossy", self._glossy, self._glossy_pdf, self._glossy_sample),
+                Lobe("diffuse", self._diffuse,
+                     lambda ops, wi, wo, q: ops.where(above(ops, wi, wo), warps.cosine_hemisphere_pdf(ops, wo), 0.0),
+                     lambda ops, wi, u, q: warps.cosine_hemisphere(ops, u[1], u[2]),
+                     lambda ops, wi, p: p.rd))
 
     # -- the delta lobe ---------------------------------------------------------------
     def delta_lobes(self, wi):
@@ -390,27 +407,26 @@ class HeTorrance(BxDF):
         base = math.sqrt(2.0) / (q.tau * kappa)
         return base, base * ops.sqrt(ops.maximum(gn, 1.0))
 
-    @staticmethod
-    def mixture_weights(ops, q):
-        """``(narrow, wide, cosine)``: ``rd``'s share goes to the cosine lobe, at least 0.1."""
+    def lobe_weights(self, ops, wi, q):
+        """``(1 - p_c, p_c)``, ``p_c = min(0.1 + rd, 0.9)``: ``rd``'s share goes to the
+        cosine lobe, at least 0.1 of the samples (it also covers the tails of the series)."""
         pc = ops.minimum(0.1 + q.rd, 0.9)
-        return 0.5 * (1.0 - pc), 0.5 * (1.0 - pc), pc
+        return 1.0 - pc, pc
 
-    def _pdf(self, ops, wi, wo, q):
+    def _glossy_pdf(self, ops, wi, wo, q):
+        """``cos(theta_o) (N_1(d) + N_2(d)) / 2``, ``d = xy(wi) + xy(wo)``."""
         s1, s2 = self.lobe_widths(ops, q)
-        w1, w2, wc = self.mixture_weights(ops, q)
         dx, dy = wi[0] + wo[0], wi[1] + wo[1]
         d2 = dx * dx + dy * dy
-        gauss = w1 * ops.exp(-0.5 * d2 / (s1 * s1)) / (2.0 * PI * s1 * s1) \
-            + w2 * ops.exp(-0.5 * d2 / (s2 * s2)) / (2.0 * PI * s2 * s2)
-        z = ops.maximum(wo[2], 0.0)
-        return ops.where(above(ops, wi, wo), z * (gauss + wc * INV_PI), 0.0)
+        gauss = 0.5 * ops.exp(-0.5 * d2 / (s1 * s1)) / (2.0 * PI * s1 * s1) \
+            + 0.5 * ops.exp(-0.5 * d2 / (s2 * s2)) / (2.0 * PI * s2 * s2)
+        return ops.where(above(ops, wi, wo), ops.maximum(wo[2], 0.0) * gauss, 0.0)
 
-    def _sample(self, ops, wi, u, q):
+    def _glossy_sample(self, ops, wi, u, q):
+        """``d`` from the narrow (``u[0] < 1/2``) or the wide Gaussian (Box-Muller),
+        ``wo_xy = d - wi_xy``; ``(0, 0, -1)`` (invalid) outside the unit disc."""
         s1, s2 = self.lobe_widths(ops, q)
-        w1, w2, wc = self.mixture_weights(ops, q)
-        narrow = u[0] < w1
-        s = ops.where(narrow, s1, s2)
+        s = ops.where(u[0] < 0.5, s1, s2)
         r = s * ops.sqrt(-2.0 * ops.log(ops.maximum(1.0 - u[1], 1e-300)))
         phi = 2.0 * PI * u[2]
         ox = r * ops.cos(phi) - wi[0]
@@ -418,9 +434,13 @@ class HeTorrance(BxDF):
         rho2 = ox * ox + oy * oy
         inside = rho2 < 1.0
         oz = ops.sqrt(ops.maximum(1.0 - rho2, 0.0))
-        gauss = (ops.where(inside, ox, 0.0), ops.where(inside, oy, 0.0), ops.where(inside, oz, -1.0))
-        cosine = warps.cosine_hemisphere(ops, u[1], u[2])
-        return warps.mixture(ops, u[0] < w1 + w2, gauss, cosine)
+        return (ops.where(inside, ox, 0.0), ops.where(inside, oy, 0.0), ops.where(inside, oz, -1.0))
+
+    def _pdf(self, ops, wi, wo, q):
+        return mixture_pdf(ops, self, wi, wo, q)
+
+    def _sample(self, ops, wi, u, q):
+        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi):
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]
