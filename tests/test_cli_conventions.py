@@ -114,7 +114,7 @@ def test_check_json_gives_non_applicable_checks_as_null_and_counts_them_apart(tm
     res = {x["name"]: x for x in d["results"]}
     assert res["sampling"]["passed"] is None and res["sampling"]["figure"] is None
     assert res["energy"]["passed"] is True and res["energy"]["figure"] == pytest.approx(0.8, abs=1e-9)
-    assert d["counts"] == {"passed": 2, "failed": 0, "not_applicable": 2}
+    assert d["counts"] == {"passed": 2, "failed": 0, "unresolved": 0, "not_applicable": 2}
 
 
 @pytest.fixture
