@@ -114,7 +114,7 @@ def test_check_json_gives_non_applicable_checks_as_null_and_counts_them_apart(tm
     res = {x["name"]: x for x in d["results"]}
     assert res["sampling"]["passed"] is None and res["sampling"]["figure"] is None
     assert res["energy"]["passed"] is True and res["energy"]["figure"] == pytest.approx(0.8, abs=1e-9)
-    assert d["counts"] == {"passed": 2, "failed": 0, "not_applicable": 2}
+    assert d["counts"] == {"passed": 2, "failed": 0, "unresolved": 0, "not_applicable": 2}
 
 
 @pytest.fixture
@@ -164,14 +164,22 @@ def test_albedo_json_holds_the_curve():
     assert len(d[1]["value"]) == 3 and d[1]["model"].startswith("modified-phong:")
 
 
-def test_materials_json_and_unloadable_fits_left_out():
+def test_materials_json_and_unloadable_fits_left_out(monkeypatch):
     from plausible import library
 
     d = json.loads(run("materials", "--json").output)
     assert {f["key"] for f in d["fits"]} == {f.key for f in library.fits()}
     he = next(f for f in d["fits"] if f["key"] == "ngan2005/he")
-    assert he["loadable"] is False and "not implemented" in he["reason"]
-    assert all("ngan2005/he" not in keys for keys in d["materials"].values())
+    assert he["loadable"] is True               # every shipped set loads since issue 26
+    assert "ngan2005/he" in d["materials"]["nickel"]
+    # a set whose model is missing is listed as such and left out of the materials
+    fake = library.FitSet("test/unbuilt", "ngan_ward.fit", "NganWard", "test", "test",
+                          "the model is not implemented in plausible (test)")
+    monkeypatch.setattr(library, "FIT_SETS", library.FIT_SETS + (fake,))
+    d = json.loads(run("materials", "--json").output)
+    un = next(f for f in d["fits"] if f["key"] == "test/unbuilt")
+    assert un["loadable"] is False and "not implemented" in un["reason"]
+    assert all("test/unbuilt" not in keys for keys in d["materials"].values())
     assert "ngan2005/ward" in d["materials"]["nickel"]
 
 

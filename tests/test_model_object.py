@@ -70,7 +70,7 @@ def test_parameters_survive_pickling_and_json():
 
 @pytest.mark.parametrize("bad", [[0.1, 0.2], [0.1, 0.2, 0.3, 0.4]])
 def test_colours_have_one_or_three_channels(bad):
-    with pytest.raises(ValueError, match=r"'kd' must have 1 or 3 channel\(s\).*got %d" % len(bad)):
+    with pytest.raises(ValueError, match=r"'kd' must have 1 or 3 channels.*got %d" % len(bad)):
         plausible.make("modified-phong", kd=bad)
     assert plausible.make("modified-phong", kd=[0.1]).channels == 1
     assert plausible.make("modified-phong", kd=[0.1, 0.2, 0.3]).channels == 3

@@ -320,12 +320,9 @@ class BxDF:
                              f"allowed: {', '.join(names) or 'none'}")
         values = {}
         for p in self.PARAMS:
-            values[p.name] = _frozen(p.validate(params.get(p.name, p.default), owner))
-        for p, v in zip(self.PARAMS, values.values()):
-            if p.kind == "color" and np.ndim(v) == 1 and np.size(v) not in self.CHANNELS:
-                raise ValueError(f"{owner}: parameter '{p.name}' must have "
-                                 f"{' or '.join(map(str, self.CHANNELS))} channel(s) "
-                                 f"(a grey value or RGB), got {np.size(v)}: {fmt(v)}")
+            value = params.get(p.name, p.default)
+            checked = p.validate(value, owner, self.CHANNELS) if p.kind == "color" else p.validate(value, owner)
+            values[p.name] = _frozen(checked)
         sizes = {np.size(v) for p, v in zip(self.PARAMS, values.values())
                  if p.kind == "color" and np.ndim(v) == 1}
         if len(sizes) > 1:

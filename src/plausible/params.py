@@ -41,9 +41,11 @@ class Param:
         hi = "inf" if self.hi == math.inf else f"{self.hi:g}"
         return f"[{lo}, {hi}]"
 
-    def validate(self, value, owner: str = "model"):
+    def validate(self, value, owner: str = "model", channels: tuple = None):
         """Return the value converted (float, or float64 array for colours).
 
+        ``channels``: the channel counts a colour may have (default
+        :data:`COLOR_CHANNELS`; a spectral model passes its own, ``BxDF.CHANNELS``).
         Raises :class:`ValueError` naming the parameter and its allowed range.
         """
         where = f"{owner}: parameter '{self.name}'"
@@ -64,9 +66,10 @@ class Param:
             if arr.ndim > 1 or arr.size == 0:
                 raise ValueError(f"{where} must be a scalar or a 1-D channel array "
                                  f"(e.g. RGB), got shape {arr.shape}")
-            if arr.ndim == 1 and arr.size not in COLOR_CHANNELS:
-                raise ValueError(f"{where} must be a number or {' or '.join(map(str, COLOR_CHANNELS))} "
-                                 f"channels (grey or RGB), got {arr.size} channels")
+            channels = COLOR_CHANNELS if channels is None else channels
+            if arr.ndim == 1 and arr.size not in channels:
+                raise ValueError(f"{where} must have {' or '.join(map(str, channels))} channels "
+                                 f"(a number is grey, 3 values RGB), got {arr.size} channels: {value!r}")
             if not np.all(np.isfinite(arr)) or np.any(arr < self.lo) or np.any(arr > self.hi):
                 raise ValueError(f"{where} must lie in {self.range_text()}, got {value!r}")
             return float(arr) if arr.ndim == 0 else arr
