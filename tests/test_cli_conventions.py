@@ -164,14 +164,22 @@ def test_albedo_json_holds_the_curve():
     assert len(d[1]["value"]) == 3 and d[1]["model"].startswith("modified-phong:")
 
 
-def test_materials_json_and_unloadable_fits_left_out():
+def test_materials_json_and_unloadable_fits_left_out(monkeypatch):
     from plausible import library
 
     d = json.loads(run("materials", "--json").output)
     assert {f["key"] for f in d["fits"]} == {f.key for f in library.fits()}
     he = next(f for f in d["fits"] if f["key"] == "ngan2005/he")
-    assert he["loadable"] is False and "not implemented" in he["reason"]
-    assert all("ngan2005/he" not in keys for keys in d["materials"].values())
+    assert he["loadable"] is True               # every shipped set loads since issue 26
+    assert "ngan2005/he" in d["materials"]["nickel"]
+    # a set whose model is missing is listed as such and left out of the materials
+    fake = library.FitSet("test/unbuilt", "ngan_ward.fit", "NganWard", "test", "test",
+                          "the model is not implemented in plausible (test)")
+    monkeypatch.setattr(library, "FIT_SETS", library.FIT_SETS + (fake,))
+    d = json.loads(run("materials", "--json").output)
+    un = next(f for f in d["fits"] if f["key"] == "test/unbuilt")
+    assert un["loadable"] is False and "not implemented" in un["reason"]
+    assert all("test/unbuilt" not in keys for keys in d["materials"].values())
     assert "ngan2005/ward" in d["materials"]["nickel"]
 
 

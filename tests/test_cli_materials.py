@@ -18,7 +18,7 @@ def run(*args):
 def test_materials_lists_fit_sets_and_every_material_with_its_fits():
     r = run("materials")
     assert r.exit_code == 0
-    for word in ("ngan2005/ward-duer", "low2012/cook-torrance-e2", "not loadable", "alum-bronze", "yellow-plastic"):
+    for word in ("ngan2005/ward-duer", "low2012/cook-torrance-e2", "ngan2005/he", "alum-bronze", "yellow-plastic"):
         assert word in r.output
     only = run("materials", "--fit", "ngan2005/ward")
     assert "(86) of ngan2005/ward" in only.output

@@ -439,7 +439,7 @@ MAX_LANES = 1 << 27
 
 
 def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
-              per_phi: bool = False, tmax=None) -> np.ndarray:
+              per_phi: bool = False, tmax=None, tmin=None) -> np.ndarray:
     """Tensor-product quadrature sums for many incidences in one Dr.Jit launch:
 
     ``S[a] = sum_ij theta_w[a, i] phi_w[a, j] g(wis[a], wo(theta[a, i], phi[a, j]))``
@@ -456,7 +456,8 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
     of :func:`plausible.analysis.quadrature.half_vector_breaks`: ``theta`` holds
     ``s``, the half vector is at polar angle ``t = s tmax`` and azimuth ``phi``,
     ``wo = 2 (wi.h) h - wi``, and each node's weight is multiplied by
-    ``tmax sin(t) 4 (wi.h)`` (``theta_w`` then holds no ``sin``)."""
+    ``tmax sin(t) 4 (wi.h)`` (``theta_w`` then holds no ``sin``); with ``tmin`` too (shaped
+    alike) the polar angle is ``t = tmin + s tmax`` (``tmax`` the span)."""
     dr, F, U, ops = _dr()
     A, nt = theta.shape
     npp = phi.shape[1]
@@ -469,14 +470,15 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
     for s in range(0, A, group):
         e = min(s + group, A)
         out.append(_grid_sums(dr, F, U, ops, model, kind, wis[s:e], theta[s:e], theta_w[s:e],
-                              phi[s:e], phi_w[s:e], c, per_phi, None if tmax is None else tmax[s:e]))
+                              phi[s:e], phi_w[s:e], c, per_phi, None if tmax is None else tmax[s:e],
+                              None if tmin is None else tmin[s:e]))
     res = np.concatenate(out)
     if per_phi:
         return res.reshape(A, npp)
     return res.reshape(A, c) if kind == "f" and model.channels else res
 
 
-def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi, tmax=None):
+def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi, tmax=None, tmin=None):
     A, nt = theta.shape
     npp = phi.shape[1]
     lanes = A * nt * npp * c
@@ -510,7 +512,10 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
         wo = (st * cp, st * sp, ct)
     else:   # the half-vector frame: h at (s tmax, phi), wo its mirror image of wi
         tm = dr.gather(F, table(tmax), pj)
-        st, ct = dr.sincos(dr.gather(F, table(theta), ti) * tm)
+        t = dr.gather(F, table(theta), ti) * tm
+        if tmin is not None:
+            t = t + dr.gather(F, table(tmin), pj)
+        st, ct = dr.sincos(t)
         h = (st * cp, st * sp, ct)
         d = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]
         wo = tuple(2.0 * d * hk - wk for hk, wk in zip(h, wi))

@@ -415,6 +415,15 @@ class BxDF:
         """
         return [np.array([-wi[0], -wi[1], wi[2]])]
 
+    def mirror_cut(self) -> bool:
+        """Whether the lobe is cut off along the great circle ``R.wo = 0`` (``R`` the
+        mirror direction): a ``cos^n(alpha)`` lobe clamped to ``R.wo > 0``, which
+        jumps there when ``n = 0``.  A hint for the albedo integrator of
+        :mod:`plausible.analysis.albedo`: it makes that circle a panel edge of its
+        half-vector frame (:func:`~plausible.analysis.quadrature.half_vector_lune`).
+        The default: no such cut."""
+        return False
+
     # -- parameters as kernel data (plausible.kernel_params) ------------------------
     def _kernel_view(self, convert):
         """A shallow copy whose data parameters (the floats and channel arrays of

@@ -91,6 +91,26 @@ def conductor(ops, cos_i, eta, k):
     return 0.5 * (rs + rp)
 
 
+def cook(ops, cos_i, eta):
+    """Unpolarised dielectric reflectance in Cook & Torrance's form (ACM TOG 1982, eq. in
+    sec. "The Fresnel term"; bbm ``fresnel::cook``):
+    ``F = (g - c)^2 / (2 (g + c)^2) (1 + ((c (g + c) - 1) / (c (g - c) + 1))^2)``,
+    ``g = sqrt(eta^2 - 1 + c^2)``, with ``eta^2 - 1`` written ``(eta - 1)(eta + 1)`` so that
+    ``eta = 1`` gives exactly 0 (``g = c``, also at ``c = 0``); ``g = 0`` under total
+    internal reflection (``F = 1``).  Equal to :func:`dielectric` for ``eta >= 1``."""
+    c = ops.minimum(ops.maximum(cos_i, 0.0), 1.0)
+    g = ops.sqrt(ops.maximum((eta - 1.0) * (eta + 1.0) + c * c, 0.0))
+    s = g + c
+    ok = s > 0
+    a = (g - c) / ops.where(ok, s, 1.0)
+    den = c * (g - c) + 1.0
+    okb = ops.abs(den) > 0
+    b = (c * s - 1.0) / ops.where(okb, den, 1.0)
+    # c = g = 0 (grazing, eta <= 1): 1 under total internal reflection (eta < 1), 0 at eta = 1
+    grazing = ops.where((eta - 1.0) * (eta + 1.0) + 0.0 * c < 0.0, 1.0, 0.0)
+    return ops.where(ok & okb, 0.5 * a * a * (1.0 + b * b), grazing)
+
+
 #: Fresnel choices shared by the metal models (``fresnel=`` parameter).
 FRESNEL_CHOICES = ("none", "schlick", "conductor")
 

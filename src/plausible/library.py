@@ -38,8 +38,10 @@ import numpy as np
 
 from .models.ashikhmin_shirley import AshikhminShirleySpecular
 from .models.cook_torrance import CookTorrance
+from .models.he_torrance import HeTorrance
 from .models.lafortune import Lafortune
 from .models.lambert import Lambertian
+from .models.low import LowMicrofacet, LowSmooth
 from .models.published import AshikhminShirleyDielectric, CookTorranceWide, NganBlinnPhong
 from .models.sum import Sum
 from .models.ward import Ward
@@ -69,12 +71,6 @@ class FitSet:
         return not self.reason
 
 
-_HE = ("the He, Torrance, Sillion, Greenberg 1991 model (a physical optics model with an infinite "
-       "series and a geometric term) is not implemented in plausible")
-_LOW_MF = ("Löw et al.'s microfacet model (their ABC distribution with a Cook-Torrance shadowing "
-           "and Fresnel) is not implemented in plausible")
-_LOW_SM = "Löw et al.'s smooth-surface model (ABC scattering) is not implemented in plausible"
-
 FIT_SETS = (
     FitSet("ngan2005/ashikhmin-shirley", "ngan_ashikhminshirley.fit", "NganAshikhminShirley", NGAN,
            "isotropic Ashikhmin-Shirley specular lobe, Schlick Fresnel (R0), RGB albedo; no coupled diffuse term"),
@@ -88,7 +84,9 @@ FIT_SETS = (
            "isotropic Ward (1992), 1 / (4 pi a^2 sqrt(cos_i cos_o))"),
     FitSet("ngan2005/ward-duer", "ngan_wardduer.fit", "NganWardDuer", NGAN,
            "isotropic Ward-Dür, 1 / (4 pi a^2 cos_i cos_o)"),
-    FitSet("ngan2005/he", "ngan_he.fit", "NganHe", NGAN, "He et al. 1991 physical model", _HE),
+    FitSet("ngan2005/he", "ngan_he.fit", "NganHe", NGAN,
+           "He et al. 1991 directional diffuse (Westin's reading, real index eta, RGB wavelengths "
+           "0.645/0.526/0.444 um, Beckmann's rough limit from g = 18), times an RGB albedo"),
     FitSet("low2012/ashikhmin-shirley-e1", "low_ashikhminshirley_E1.fit", "LowAshikhminShirley", LOW,
            "isotropic Ashikhmin-Shirley lobe with the exact dielectric Fresnel (index eta), metric E1"),
     FitSet("low2012/ashikhmin-shirley-e2", "low_ashikhminshirley_E2.fit", "LowAshikhminShirley", LOW,
@@ -98,10 +96,14 @@ FIT_SETS = (
     FitSet("low2012/cook-torrance-e2", "low_cooktorrance_E2.fit", "LowCookTorrance", LOW,
            "original Cook-Torrance: unnormalised Beckmann, V-groove G, dielectric F, / pi; metric E2"),
     FitSet("low2012/microfacet-e2", "low_lowmicrofacet_E2.fit", "LowMicrofacetFit", LOW,
-           "Löw et al. microfacet model, metric E2", _LOW_MF),
+           "Löw et al. microfacet model A (1 + B (1 - n.h))^-C G F / (pi cos_i cos_o), metric E2"),
     FitSet("low2012/smooth-e2", "low_lowsmooth_E2.fit", "LowSmooth", LOW,
-           "Löw et al. smooth-surface model, metric E2", _LOW_SM),
+           "Löw et al. smooth-surface model A (1 + B |Ip + Op|^2)^-C F(theta_d), metric E2"),
 )
+
+#: The wavelengths (micrometres) of bbm's RGB channels (``Config::wavelength()``),
+#: which its ``NganHe`` evaluates the He fits at.
+NGAN_HE_WAVELENGTHS = (0.645, 0.526, 0.444)
 
 #: The fit set used when none is named.
 DEFAULT_FIT = "ngan2005/ashikhmin-shirley"
@@ -269,6 +271,11 @@ def build_term(term: Term, where: str = "term"):
     name = term.model
     if name == "Lambertian":
         return Lambertian(rd=_rgb(g("albedo"), where)), None
+    if name in ("LowMicrofacetFit", "LowSmooth"):
+        abc = dict(A=_rgb(g("A"), where), B=float(g("B")), C=float(g("C")), eta=float(g("eta")))
+        if name == "LowSmooth":
+            return LowSmooth(**abc), None
+        return LowMicrofacet(normalization="pi", **abc), None   # bbm's lowmicrofacetfit: / pi
     albedo = _rgb(g("albedo"), where)
     if name == "NganAshikhminShirley":
         n = float(g("sharpness"))
@@ -298,6 +305,13 @@ def build_term(term: Term, where: str = "term"):
         part = CookTorranceWide(m=float(g("roughness")), rs=1.0, fresnel="conductor",
                                 eta=float(g("eta")), k=0.0, geometry="vgroove")
         return part, albedo * 4.0
+    if name == "NganHe":
+        # bbm's nganhe: he_base<fresnel::cook, errata, westin, ..., rough threshold 18> scaled by
+        # its albedo (docs/materials.md: eta = 1.0 makes F exactly 0)
+        part = HeTorrance(sigma0=float(g("roughness")), tau=float(g("autocorrelation")),
+                          wavelength=NGAN_HE_WAVELENGTHS, fresnel="dielectric", eta=float(g("eta")),
+                          rd=0.0, variant="westin", rough="beckmann")
+        return part, albedo
     raise ValueError(f"{where}: bbm model {name!r} is not implemented in plausible")
 
 

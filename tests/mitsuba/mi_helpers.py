@@ -38,6 +38,9 @@ MODERATE = {
     # as it does for its own roughconductor; moderate roughness here.
     "ward": dict(alpha_x=0.25, alpha_y=0.4, rd=[0.1, 0.2, 0.3], rs=[0.5, 0.6, 0.7]),
     "cook-torrance": dict(m=0.3),
+    # tau = 3 um puts the lobe within ~2 degrees of the mirror direction (tau kappa ~ 40):
+    # finer than the harness's grid resolves at normal incidence; tau = 1 um, ~6 degrees
+    "he-torrance": dict(tau=1.0),
 }
 
 

@@ -38,6 +38,6 @@ def test_unknown_material_names_the_closest_ones():
         mi.load_dict({"type": "plausible_material", "name": "alum-bronz"})
 
 
-def test_a_fit_that_cannot_be_loaded_is_refused():
+def test_an_unknown_fit_is_refused_naming_the_fits():
     with pytest.raises(Exception, match="ngan2005/ward"):
-        mi.load_dict({"type": "plausible_material", "name": "nickel", "fit": "ngan2005/he"})
+        mi.load_dict({"type": "plausible_material", "name": "nickel", "fit": "ngan2005/hee"})

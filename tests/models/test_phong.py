@@ -43,6 +43,59 @@ def test_cos0_phong_lobe_albedo_closed_form(theta):
     assert abs(a.value - exact) <= a.error < 1e-4     # the error bound is honest, and below 1e-4
 
 
+@pytest.mark.parametrize("spec,exact", [
+    ("modified-phong:kd=0.3:ks=0.7:n=0", lambda c: 0.3 + 0.7 * (1 + c) / 2),   # lune plus Lambert
+    ("phong:ks=1:n=0", lambda c: (1 + c) / (2 * c)),                            # the lune over cos(theta_i)
+])
+@pytest.mark.parametrize("theta", [10.0, 45.0, 80.0, 89.9])
+def test_mirror_cut_lobes_albedo_closed_form(spec, exact, theta):
+    # the lune's edge R.wo = 0 is a panel edge (BxDF.mirror_cut): converged, with an honest bound
+    c = math.cos(math.radians(theta))
+    a = albedo(plausible.make(spec), direction(math.radians(theta)))
+    assert abs(a.value - exact(c)) <= a.error < 1e-7 * exact(c)
+
+
+def test_lune_edge_hint_is_what_converges_the_cut_lobe():
+    # without the hint the cut lies inside panels: the bound stays large at 80 degrees (the
+    # failure of the half-vector frame alone); with it, 1e-9
+    from plausible.models.phong import ReciprocalPhong
+
+    class Uncut(ReciprocalPhong):
+        def mirror_cut(self):
+            return False
+
+    wi = direction(math.radians(80.0))
+    exact = (1 + math.cos(math.radians(80.0))) / 2
+    cut, uncut = albedo(ReciprocalPhong(ks=1.0, n=0.0), wi), albedo(Uncut(ks=1.0, n=0.0), wi)
+    assert abs(cut.value - exact) <= cut.error < 1e-8
+    assert uncut.error > 1e-6
+
+
+def test_half_vector_lune_is_where_the_mirror_cosine_vanishes():
+    # independent truth: wo = 2 (wi.h) h - wi and R = (-wi_x, -wi_y, wi_z) directly
+    from plausible.analysis.quadrature import half_vector_lune
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        ti, pi_ = rng.uniform(0.01, 1.56), rng.uniform(-math.pi, math.pi)
+        wi = np.asarray(direction(ti, pi_))
+        r = np.array([-wi[0], -wi[1], wi[2]])
+        phi = rng.uniform(-math.pi, math.pi, 64)
+        big_t = half_vector_lune(wi, phi)
+        for t_scale, sign in ((0.999, 1.0), (1.001, -1.0)):
+            t = big_t * t_scale
+            h = np.stack([np.sin(t) * np.cos(phi), np.sin(t) * np.sin(phi), np.cos(t)], axis=-1)
+            wo = 2.0 * (h @ wi)[:, None] * h - wi
+            rw = wo @ r
+            cross = big_t < 0.5 * math.pi - 1e-12
+            assert np.all(sign * rw[cross] > 0)
+            if t_scale < 1:
+                assert np.all(rw[~cross] >= -1e-12)   # no crossing: R.wo >= 0 up to t = pi/2
+        h = np.stack([np.sin(big_t) * np.cos(phi), np.sin(big_t) * np.sin(phi), np.cos(big_t)], axis=-1)
+        wo = 2.0 * (h @ wi)[:, None] * h - wi
+        np.testing.assert_allclose((wo @ r)[big_t < 0.5 * math.pi - 1e-12], 0.0, atol=1e-12)
+
+
 @pytest.mark.parametrize("n", [0.0, 1.0, 7.0, 20.0, 150.0, 1e4])
 def test_blinn_normalisation_gives_unit_albedo_at_normal_incidence(n):
     a = albedo(plausible.make("reciprocal-blinn", ks=1.0, n=n), Z, tol=1e-9)

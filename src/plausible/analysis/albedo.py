@@ -26,7 +26,7 @@ from .. import backend as _backend
 from ..bxdf import BxDF, as_directions
 from ..progress import start
 from ..vec import direction as _direction
-from .quadrature import half_vector_breaks, half_vector_tmax, panel_rule
+from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
 
 
 @dataclass(frozen=True)
@@ -87,24 +87,39 @@ TOL = 1e-6
 class _Rules:
     """The panel rules of one incidence in the half-vector frame
     (:func:`~.quadrature.half_vector_breaks`): breakpoints per floor refinement
-    (cached) and the tensor rule's 1-D nodes and weights per ``(m, refine)``."""
+    (cached) and the tensor rule's 1-D nodes and weights per ``(m, refine)``.
+
+    For a model with :meth:`~plausible.bxdf.BxDF.mirror_cut` the polar range of
+    every azimuth is cut in two at ``T1 = min(T, tmax)``, ``T`` the lune's edge
+    ``R.wo = 0`` (:func:`~.quadrature.half_vector_lune`): the ``s`` rule runs once
+    over ``[0, T1]`` and once over ``[T1, tmax]`` (where that is not empty), so
+    the jump of a ``cos^0`` lobe is a panel edge as it is for the horizon."""
 
     def __init__(self, model, wi, levels, axes=True):
         self.model, self.wi, self.levels, self.axes = model, wi, levels, axes
+        cut = getattr(model, "mirror_cut", None)
+        self.lune = bool(cut()) if callable(cut) else False
         self._breaks = {}
         self.sums = {}
 
     def nodes(self, m, refine):
-        """``(s, ws, phi, wp, tmax)``: the nodes and weights in ``s`` and ``phi`` and
-        ``tmax(phi)`` (the node of ``(s, phi)`` is the half vector at polar angle
-        ``s tmax(phi)``; see :func:`_grid_sum`)."""
+        """``(s, ws, phi, wp, t0, span)``: the nodes and weights in ``s`` and ``phi``
+        and the polar range ``[t0, t0 + span]`` of each azimuth node (the node of
+        ``(s, phi)`` is the half vector at polar angle ``t0 + s span``; see
+        :func:`_grid_sum`)."""
         if refine not in self._breaks:
             self._breaks[refine] = half_vector_breaks(self.wi, self.model.peak_directions(self.wi),
-                                                      self.levels, refine, axes=self.axes)
+                                                      self.levels, refine, axes=self.axes, lune=self.lune)
         sb, pb = self._breaks[refine]
         s, ws = panel_rule(sb, m)
         p, wp = panel_rule(pb, m)
-        return s, ws, p, wp, half_vector_tmax(self.wi, p)
+        tmax = half_vector_tmax(self.wi, p)
+        if not self.lune:
+            return s, ws, p, wp, np.zeros_like(p), tmax
+        t1 = np.minimum(half_vector_lune(self.wi, p), tmax)
+        out = tmax > t1 * (1.0 + 1e-15)
+        return (s, ws, np.concatenate([p, p[out]]), np.concatenate([wp, wp[out]]),
+                np.concatenate([np.zeros_like(p), t1[out]]), np.concatenate([t1, tmax[out] - t1[out]]))
 
 
 def _pad(rows):
@@ -146,22 +161,22 @@ def _jit_sums(model, kind, rules, requests, grids):
     for key in sorted({(m, r) for _, m, r in requests}):
         idx = [k for k, (_, m, r) in enumerate(requests) if (m, r) == key]
         wis = np.array([rules[requests[k][0]].wi for k in idx])
-        cols = [_pad([grids[k][c] for k in idx]) for c in range(5)]
+        cols = [_pad([grids[k][c] for k in idx]) for c in range(6)]
         for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
             for row, k in enumerate(idx):
                 cols[w][row, len(grids[k][c]):] = 0.0
-        for k, v in zip(idx, _backend.grid_sums(model, kind, wis, *cols[:4], tmax=cols[4])):
+        for k, v in zip(idx, _backend.grid_sums(model, kind, wis, *cols[:4], tmin=cols[4], tmax=cols[5])):
             res[k] = v
     return res
 
 
 def _grid_sum(model, kind, wi, grid):
     """One tensor-rule sum through the contract (``eval`` or ``pdf`` on the grid):
-    the node ``(s, phi)`` is the half vector ``h`` at polar angle ``t = s tmax(phi)``,
+    the node ``(s, phi)`` is the half vector ``h`` at polar angle ``t = t0 + s span``,
     the direction ``wo = 2 (wi.h) h - wi`` and the weight
-    ``ws wp tmax sin(t) 4 (wi.h)`` (``d omega_o = 4 (wi.h) d omega_h``)."""
-    s, ws, p, wp, tmax = grid
-    t = s[:, None] * tmax[None, :]
+    ``ws wp span sin(t) 4 (wi.h)`` (``d omega_o = 4 (wi.h) d omega_h``)."""
+    s, ws, p, wp, t0, tmax = grid
+    t = t0[None, :] + s[:, None] * tmax[None, :]
     st, ct = np.sin(t), np.cos(t)
     h = np.stack(np.broadcast_arrays(st * np.cos(p)[None, :], st * np.sin(p)[None, :], ct), axis=-1)
     d = h @ wi

@@ -146,6 +146,22 @@ def half_vector_tmax(wi, phi):
     return 0.25 * math.pi + 0.5 * delta
 
 
+def half_vector_lune(wi, phi):
+    """Polar angle ``T(phi)`` of the half vector where ``wo`` crosses the great
+    circle ``R.wo = 0`` (``R`` the mirror direction of ``wi``), for each azimuth.
+
+    Reflecting about ``n`` and then about ``h`` rotates by ``2t`` about the unit axis
+    ``a = (-sin phi, cos phi, 0)``, so ``R.wo = cos(2t) + (1 - cos 2t) q`` with
+    ``q = (wi.a)^2 = sin^2(theta_i) sin^2(phi - phi_i)``: decreasing in ``t``, zero at
+    ``cos(2t) = -q / (1 - q)`` (``T = pi/2``, no crossing, where ``q >= 1/2``).  So
+    ``{R.wo > 0}`` is ``t < T(phi)`` at every azimuth: a curve of the frame, which
+    :class:`plausible.analysis.albedo` makes a panel edge for models with
+    :meth:`~plausible.bxdf.BxDF.mirror_cut`."""
+    ti, pi_ = _angles(wi)
+    q = (math.sin(ti) * np.sin(np.asarray(phi) - pi_)) ** 2
+    return 0.5 * np.arccos(np.clip(-q / np.maximum(1.0 - q, 1e-300), -1.0, 1.0))
+
+
 def _grade(c, lo, hi, levels):
     """``c`` and ``c +- (hi - lo) 2^-k``, ``k = 1..levels``."""
     d = (hi - lo) * 0.5 ** np.arange(1, levels + 1)
@@ -159,7 +175,7 @@ def _merge(lo, hi, pts):
 
 
 def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels: int = POLE_LEVELS,
-                       axes: bool = True):
+                       axes: bool = True, lune: bool = False):
     """Panel breakpoints ``(s_breaks, phi_breaks)`` of the half-vector frame for the
     incidence ``wi`` (unit, ``wi_z > 0``) and lobe ``peaks``.
 
@@ -179,7 +195,10 @@ def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels
     width ``~1/(t sqrt(nv))`` about an axis), and the azimuths ``phi_i +- pi/2``,
     where ``tmax`` turns from ``~0`` to ``~pi/2`` within ``cot(theta_i)`` at grazing
     incidence (and where a lobe round in ``wo`` is stretched in ``h``), graded
-    down to that width."""
+    down to that width.  With ``lune`` also toward the azimuths of the two half
+    vectors where the circle ``R.wo = 0`` meets the horizon (``wo`` at
+    ``phi_i +- pi/2``), where the cut :func:`half_vector_lune` leaves the domain
+    (a kink of the panels' outer edge ``min(T, tmax)``)."""
     ti, pi_ = _angles(wi)
     lo, hi = pi_ - math.pi, pi_ + math.pi
     s_pts = [np.linspace(0.0, 1.0, 8 * refine + 1), 0.5 ** np.arange(1, pole_levels + 1),
@@ -202,6 +221,11 @@ def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels
     perp = int(min(MAX_LEVELS, max(0, math.ceil(math.log2(8 * math.pi * max(math.sin(ti), 1e-300)
                                                           / max(math.cos(ti), 1e-300))))))
     p_centres += [(pi_ - 0.5 * math.pi, perp), (pi_ + 0.5 * math.pi, perp)]
+    if lune and ti > 1e-9:
+        for sg in (-1.0, 1.0):
+            a = pi_ + sg * 0.5 * math.pi
+            h = wi + np.array([math.cos(a), math.sin(a), 0.0])
+            p_centres.append((math.atan2(h[1], h[0]), levels))
     for c, lv in p_centres:    # each centre and its images a period away (a centre on the seam grades both ends)
         c = lo + (c - lo) % (2 * math.pi)
         p_pts += [_grade(c + k * 2 * math.pi, lo, hi, lv) for k in (-1, 0, 1)]

@@ -241,8 +241,11 @@ class Emitter:
     def statements(self, roots):
         """GLSL statements computing ``roots`` (nodes or numbers) and the text of each root."""
         lines: list = []
-        key_of: dict = {}    # id(node) -> structural key
-        text_of: dict = {}   # structural key -> GLSL text (temporary, literal or name)
+        key_of: dict = {}    # id(node) -> number of its structural key
+        text_of: dict = {}   # structural key number -> GLSL text (temporary, literal or name)
+        number: dict = {}    # structural key (children as numbers) -> its number: a key is
+        # never a nested tuple, whose hash would cost the size of the whole subtree (exponential
+        # for a recurrence such as Clenshaw's, where each node uses the two before it)
 
         def key(e):
             return key_of[id(e)]
@@ -269,6 +272,7 @@ class Emitter:
                     k = (e.op, tuple(key(a) for a in e.args),
                          id(e.value) if isinstance(e.value, Table) else None)
                     text = None
+                k = number.setdefault(k, len(number))
                 key_of[id(e)] = k
                 if k in text_of:
                     continue

@@ -147,6 +147,10 @@ class ModifiedPhong(BxDF):
     def _f(self, ops, wi, wo, p):
         return modified_phong_diffuse(ops, wi, wo, p) + modified_phong_glossy(ops, wi, wo, p)
 
+    def mirror_cut(self):
+        """The ``cos^n`` lobe ends at ``R.wo = 0``."""
+        return True
+
     def lobes(self):
         """The ``cos^n`` lobe, then the Lambertian term (albedo ``kd``)."""
         return (Lobe("glossy", modified_phong_glossy, lambda ops, wi, wo, q: lobe_pdf(ops, wi, wo, q.n),
@@ -179,6 +183,10 @@ class _PhongLobeModel(BxDF):
 
     def _sample(self, ops, wi, u, q):
         return phong_sample(ops, wi, q.n, u[1], u[2])
+
+    def mirror_cut(self):
+        """The ``cos^n`` lobe ends at ``R.wo = 0``."""
+        return True
 
 
 class _BlinnLobeModel(BxDF):

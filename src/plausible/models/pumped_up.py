@@ -349,3 +349,6 @@ class PumpedUp(BxDF):
 
     def peak_directions(self, wi):
         return self.base.peak_directions(wi)
+
+    def mirror_cut(self):
+        return self.base.mirror_cut()

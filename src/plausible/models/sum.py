@@ -221,6 +221,9 @@ class Sum(BxDF):
             out.extend(m.peak_directions(wi))
         return out
 
+    def mirror_cut(self):
+        return any(m.mirror_cut() for m in self.parts)
+
     def __repr__(self) -> str:
         parts = ", ".join(repr(m) if s is None else f"({m!r}, {_fmt_scale(s)})"
                           for m, s in zip(self.parts, self.scales))
