@@ -265,7 +265,9 @@ def test_published_materials_are_in_the_catalogue_and_export(client):
     d = client.post("/api/albedo", json=body).json()
     direct = plausible.albedo_curve(plausible.material("gold-metallic-paint", fit="ngan2005/ward-duer"),
                                     np.radians(d["theta"]))
-    assert np.allclose(d["value"], direct.value, rtol=1e-9)
+    # the same integral (the backend auto picks may differ between the two calls:
+    # equal within the error bounds, not bit for bit)
+    assert np.all(np.abs(np.array(d["value"]) - direct.value) <= np.array(d["error"]) + direct.error)
     assert d["energy_gained_at"] == [t for t, a, e in zip(d["theta"], np.max(direct.value, -1),
                                                           np.max(direct.error, -1)) if a - e > 1 + views.ENERGY_TOL]
     spec = client.post("/api/export", json=dict(body, format="spec")).text.strip()
