@@ -127,7 +127,7 @@ def two_models(monkeypatch):
 
 
 def test_check_all_prints_one_compact_row_per_parameter_set(two_models):
-    r = run("check", "--all", "--quick")
+    r = run("check", "--all", "--quick", env={"COLUMNS": None})   # a pipe: no width set
     lines = r.output.splitlines()
     rows = [ln for ln in lines if ln.startswith("│")]
     assert len(rows) == 2 and "worst case" not in r.output        # no full reports

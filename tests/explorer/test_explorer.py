@@ -263,8 +263,9 @@ def test_published_materials_are_in_the_catalogue_and_export(client):
     assert set(entry["params"][0]["choices"]) == set(plausible.materials())
     body = {"model": "material", "params": {"name": "gold-metallic-paint", "fit": "ngan2005/ward-duer"}}
     d = client.post("/api/albedo", json=body).json()
-    direct = plausible.albedo_curve(plausible.material("gold-metallic-paint", fit="ngan2005/ward-duer"),
-                                    np.radians(d["theta"]))
+    with plausible.use_backend("numpy"):      # an independent run of the same integral
+        direct = plausible.albedo_curve(plausible.material("gold-metallic-paint", fit="ngan2005/ward-duer"),
+                                        np.radians(d["theta"]))
     # the same integral (the backend auto picks may differ between the two calls:
     # equal within the error bounds, not bit for bit)
     assert np.all(np.abs(np.array(d["value"]) - direct.value) <= np.array(d["error"]) + direct.error)

@@ -77,7 +77,8 @@ def abc_ndf(ops, h, B, C):
     """``(1 + B (1 - n.h))^-C`` for ``n.h > 0``, else 0 (Löw et al. eq. 15's ``D``, unnormalised)."""
     ok = h[2] > 0
     z = ops.where(ok, h[2], 1.0)
-    return ops.where(ok, ops.exp(-C * ops.log1p(B * (1.0 - z))), 0.0)
+    omz = (h[0] * h[0] + h[1] * h[1]) / (1.0 + z)     # 1 - n.h of a unit h, without cancellation
+    return ops.where(ok, ops.exp(-C * ops.log1p(B * omz)), 0.0)
 
 
 def abc_ndf_integral(ops, B, C):
