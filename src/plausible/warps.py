@@ -164,6 +164,20 @@ def reflected_half_vector_pdf(ops, wi, wo, nu, nv):
     return reflected_pdf(ops, wi, wo, lambda h: anisotropic_half_vector_pdf(ops, nu, nv, h))
 
 
+def projected_offset(ops, wi, r, phi):
+    """The direction whose projection on the tangent plane is ``d - wi_xy``, with
+    ``d = r (cos phi, sin phi)`` (a lobe about the mirror direction in projected
+    coordinates); ``(0, 0, -1)`` (invalid) where that point lies outside the unit disc.
+    The density of ``wo`` per solid angle is the density of ``d`` per area times
+    ``cos(theta_o)``."""
+    ox = r * ops.cos(phi) - wi[0]
+    oy = r * ops.sin(phi) - wi[1]
+    rho2 = ox * ox + oy * oy
+    inside = rho2 < 1.0
+    oz = ops.sqrt(ops.maximum(1.0 - rho2, 0.0))
+    return (ops.where(inside, ox, 0.0), ops.where(inside, oy, 0.0), ops.where(inside, oz, -1.0))
+
+
 def mixture(ops, choose_a, a, b):
     """Component-wise select between two sampled directions."""
     return (ops.where(choose_a, a[0], b[0]), ops.where(choose_a, a[1], b[1]),

@@ -428,13 +428,7 @@ class HeTorrance(BxDF):
         s1, s2 = self.lobe_widths(ops, q)
         s = ops.where(u[0] < 0.5, s1, s2)
         r = s * ops.sqrt(-2.0 * ops.log(ops.maximum(1.0 - u[1], 1e-300)))
-        phi = 2.0 * PI * u[2]
-        ox = r * ops.cos(phi) - wi[0]
-        oy = r * ops.sin(phi) - wi[1]
-        rho2 = ox * ox + oy * oy
-        inside = rho2 < 1.0
-        oz = ops.sqrt(ops.maximum(1.0 - rho2, 0.0))
-        return (ops.where(inside, ox, 0.0), ops.where(inside, oy, 0.0), ops.where(inside, oz, -1.0))
+        return warps.projected_offset(ops, wi, r, 2.0 * PI * u[2])
 
     def _pdf(self, ops, wi, wo, q):
         return mixture_pdf(ops, self, wi, wo, q)

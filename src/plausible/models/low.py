@@ -193,13 +193,7 @@ class LowSmooth(BxDF):
         # (1 - u)^(-1/(c-1)) - 1, as expm1 of the log (small u: no cancellation)
         t = -ops.log(ops.maximum(1.0 - u[1], 1e-300)) / (c - 1.0)
         r = ops.sqrt(ops.maximum(ops.exp(t) - 1.0, 0.0) / q.B)
-        phi = 2.0 * PI * u[2]
-        ox = r * ops.cos(phi) - wi[0]
-        oy = r * ops.sin(phi) - wi[1]
-        rho2 = ox * ox + oy * oy
-        inside = rho2 < 1.0
-        oz = ops.sqrt(ops.maximum(1.0 - rho2, 0.0))
-        lobe = (ops.where(inside, ox, 0.0), ops.where(inside, oy, 0.0), ops.where(inside, oz, -1.0))
+        lobe = warps.projected_offset(ops, wi, r, 2.0 * PI * u[2])
         return warps.mixture(ops, u[0] < pl, lobe, warps.cosine_hemisphere(ops, u[1], u[2]))
 
     def peak_directions(self, wi):
