@@ -20,6 +20,7 @@ import plausible
 from plausible.analysis import albedo, albedo_curve, direction
 from plausible.analysis import compensation as comp
 from plausible.analysis.adapters import CallableBxDF
+from plausible.ops import NP
 from reference import chi2_sampler_pvalue, mc_albedo
 
 #: Bases that lose energy with Fresnel = 1: Cook-Torrance (Beckmann, V-groove G) loses 13 % at
@@ -85,8 +86,19 @@ def test_kulla_conty_equals_its_formula_at_random_pairs(kc_ct):
 def test_schlick_fresnel_average_is_the_closed_form():
     """2 int mu (R0 + (1 - R0)(1 - mu)^5) dmu = R0 + (1 - R0)/21."""
     r0 = np.array([0.04, 0.5, 0.95])
-    assert np.allclose(comp.fresnel_average("schlick", r0, 0.2, 3.0), (20 * r0 + 1) / 21, rtol=0, atol=1e-14)
-    assert float(comp.fresnel_average("none", 0.7, 0.2, 3.0)) == pytest.approx(0.7, abs=1e-14)
+    assert np.allclose(comp.fresnel_average(NP, "schlick", r0, 0.2, 3.0), (20 * r0 + 1) / 21, rtol=0, atol=1e-14)
+    assert float(comp.fresnel_average(NP, "none", 0.7, 0.2, 3.0)) == pytest.approx(0.7, abs=1e-14)
+
+
+def test_conductor_fresnel_average_agrees_with_adaptive_quadrature():
+    """Gold's conductor factor (eta, k at 550 nm about 0.42, 2.35): the 24-node rule against
+    scipy's adaptive quadrature of 2 F(mu) mu."""
+    from scipy.integrate import quad
+    from plausible import fresnel
+
+    eta, k = 0.42, 2.35
+    want = quad(lambda mu: 2 * mu * float(fresnel.conductor(NP, mu, eta, k)), 0, 1, epsabs=1e-14)[0]
+    assert float(comp.fresnel_average(NP, "conductor", 1.0, eta, k)) == pytest.approx(want, abs=1e-10)
 
 
 def test_multiple_scattering_fresnel_is_the_sum_of_the_later_bounces():

@@ -46,11 +46,18 @@ from ..bxdf import BxDF, above, split, stack
 from ..ops import INV_PI, NP
 from ..params import Param
 from ..registry import register
+from ..tables import AngleTable
 from ..models.pumped_up import ModelParam, PumpedUp, albedo_table_of, horizon_albedos
 
 #: The operators of :func:`compensate` (the last one the non-reciprocal reference).
 METHODS = ("pumping-up", "kulla-conty", "incident-albedo")
-#: Gauss-Legendre nodes of ``E_avg`` (per ``mu``) and ``F_avg``: far beyond the table's
+#: Gauss-Legendre nodes of ``F_avg`` (:func:`fresnel_average`, computed in the hooks): the
+#: conductor factor of gold is integrated to 1e-12 with them.
+FAVG_NODES = 24
+_FAVG_RULE = tuple(tuple(float(v) for v in a) for a in (
+    0.5 * (np.polynomial.legendre.leggauss(FAVG_NODES)[0] + 1.0),
+    np.polynomial.legendre.leggauss(FAVG_NODES)[1]))    # nodes in [0, 1] and weights 2 * (1/2)
+#: Gauss-Legendre nodes of ``E_avg`` (per ``mu``): far beyond the table's
 #: cubic pieces (91 nodes in ``theta``), so the integral of the interpolated table is
 #: exact to rounding and the compensated albedo is 1 up to the table's own error.
 AVG_NODES = 256
@@ -58,6 +65,11 @@ AVG_NODES = 256
 AVG_PHIS = 256
 #: Smallest probability of either mixture component of :class:`KullaConty`'s sampler.
 MIX_FLOOR = 0.02
+#: A loss ``1 - E`` at a table node below this is the integrals' rounding (the nodes are
+#: integrated to 1e-5; near the normal a smooth mirror's ``1 - E`` is 1e-14 of noise) and
+#: counts as 0: interpolating noise of either sign cancels, and the lobe's last digits would
+#: then depend on the order of the operations (NumPy and Dr.Jit differed by 8e-12).
+LOSS_FLOOR = 1e-9
 #: Serial numbers of the foreign bases that have no name outside the process.
 _SERIALS = itertools.count(1)
 
@@ -164,16 +176,15 @@ FRESNEL_PARAMS = (
 )
 
 
-def fresnel_average(kind, rs, eta, k) -> np.ndarray:
-    """``F_avg = 2 int_0^1 F(mu) mu dmu`` (Kulla & Conty 2017), by Gauss-Legendre with
-    :data:`AVG_NODES` nodes, per channel (shape ``()`` or ``(channels,)``).  For Schlick it
-    is ``(20 R0 + 1) / 21`` (``2 int mu (1 - mu)^5 dmu = 1/21``; tested)."""
-    x, w = np.polynomial.legendre.leggauss(AVG_NODES)
-    mu = 0.5 * (x + 1.0)
-    chans = [np.asarray(v, dtype=np.float64) for v in (rs, eta, k)]
-    tail = np.broadcast_shapes(*(c.shape for c in chans))
-    f = fresnel.weight(NP, kind, mu.reshape((-1,) + (1,) * len(tail)), *chans)
-    return np.tensordot(w * mu, np.broadcast_to(f, (len(mu),) + tail), axes=(0, 0))
+def fresnel_average(ops, kind, rs, eta, k):
+    """``F_avg = 2 int_0^1 F(mu) mu dmu`` (Kulla & Conty 2017) by Gauss-Legendre with
+    :data:`FAVG_NODES` nodes, written against ``ops`` (so the Mitsuba plugin and the Dr.Jit
+    backend compute it from the parameters at the shading point, differentiably), per
+    channel.  Exact for Schlick (a polynomial of degree 6 in ``mu``: ``(20 R0 + 1) / 21``)."""
+    total = 0.0
+    for mu, w in zip(*_FAVG_RULE):
+        total = total + (w * mu) * fresnel.weight(ops, kind, mu + 0.0 * rs, rs, eta, k)
+    return total
 
 
 def multiple_scattering_fresnel(f_avg, e_avg):
@@ -181,7 +192,6 @@ def multiple_scattering_fresnel(f_avg, e_avg):
     the bounces after the first, ``sum_k F_avg E_avg (F_avg (1 - E_avg))^k`` for ``k >= 1``,
     per unit of the colourless multiple-scattering lobe's ``1 - E_avg``.  It is 1 for
     ``F_avg = 1`` and at most ``F_avg`` (so the compensated albedo stays ``<= 1``)."""
-    f_avg = np.asarray(f_avg, dtype=np.float64)
     return f_avg * f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg))
 
 
@@ -228,29 +238,36 @@ class KullaConty(BxDF):
         _inherit(self, base)
         check_finite_albedo(base, "KullaConty", progress)
         self.table = albedo_table_of(base, progress=progress)
+        #: ``1 - E`` tabulated (floored at 0): subtracted once here, in NumPy, not at every lookup,
+        #: where ``1 - E`` near the horizon (1.4e-4 at 88 degrees for Cook-Torrance ``m = 0.5``)
+        #: would turn the last bit of ``E`` into 1e-12 of the lobe and NumPy and Dr.Jit would differ
+        # (and a loss below LOSS_FLOOR, where 1 - E is the rounding of the integrals, counts as none)
+        loss = 1.0 - self.table.values
+        self.loss_table = AngleTable(np.where(loss > LOSS_FLOOR, loss, 0.0))
         #: ``(1/pi) int (1 - E) cos``: the energy the base loses, averaged (``1 - E_avg``).
-        self.loss = table_average(self.table, lambda v: np.maximum(1.0 - v, 0.0))
+        self.loss = table_average(self.loss_table, lambda v: np.where(v > LOSS_FLOOR, v, 0.0))
         self.e_avg = 1.0 - self.loss
-        f_avg = fresnel_average(self.p.fresnel, self.p.rs, self.p.eta, self.p.k)
-        if base.channels:
-            f_avg = f_avg * _base_tint(base)
-        self.f_avg = f_avg
-        fms = multiple_scattering_fresnel(f_avg, self.e_avg)
-        # the lobe's constant, F_ms / (pi (1 - E_avg)); zero for a base that loses nothing
-        c = fms * (INV_PI / self.loss) if self.loss > 1e-12 else 0.0 * fms
-        self.channels = _channels(self, base, c)
-        self.p.ms = _as_data(c)
-        self.q.ms = float(np.mean(c))
-        self.q.ss = float(np.mean(f_avg))
+        #: a coloured base's own tint (:func:`_base_tint`), multiplied on ``F_avg``
+        self.tint = _base_tint(base) if base.channels else 1.0
+        self.channels = _channels(self, base)
+        #: ``F_avg`` and ``F_ms`` of the parameters (as the hooks compute them), per channel
+        self.f_avg = np.asarray(fresnel_average(NP, self.p.fresnel, self.p.rs, self.p.eta, self.p.k)
+                                * self.tint, dtype=np.float64)
+        self.f_ms = multiple_scattering_fresnel(self.f_avg, self.e_avg)
+        self.tint_mean = float(np.mean(self.tint))
 
     def _kernel_view(self, convert):
         out = super()._kernel_view(convert)
         out.base = self.base._kernel_view(convert)
+        if isinstance(self.tint, np.ndarray):
+            out.tint = convert(self.tint)
         return out
 
     def loss_at(self, ops, w):
-        """``1 - E(w)`` from the table, floored at 0 (a base that reflects all there)."""
-        return ops.maximum(1.0 - self.table.lookup(ops, w), 0.0)
+        """``1 - E(w)`` from the loss table; 0 below :data:`LOSS_FLOOR` (a base that reflects
+        all there, and the interpolant's cancellations between nodes of no loss)."""
+        d = self.loss_table.lookup(ops, w)
+        return ops.where(d > LOSS_FLOOR, d, 0.0)
 
     def _single(self, ops, wi, wo, p):
         f = self.base._f(ops, wi, wo, self.base.p)
@@ -258,7 +275,12 @@ class KullaConty(BxDF):
         return fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k) * f
 
     def _multiple(self, ops, wi, wo, p):
-        return p.ms * self.loss_at(ops, wi) * self.loss_at(ops, wo)
+        """``F_ms (1 - E(L)) (1 - E(V)) / (pi (1 - E_avg))``, ``F_ms`` from the parameters."""
+        if self.loss <= 1e-12:                 # a base that loses nothing: nothing to add
+            return 0.0
+        f_avg = fresnel_average(ops, p.fresnel, p.rs, p.eta, p.k) * self.tint
+        fms = multiple_scattering_fresnel(f_avg, self.e_avg)
+        return fms * (INV_PI / self.loss) * self.loss_at(ops, wi) * self.loss_at(ops, wo)
 
     def _f(self, ops, wi, wo, p):
         ok = above(ops, wi, wo)
@@ -266,11 +288,13 @@ class KullaConty(BxDF):
 
     def mix(self, ops, wi, q):
         """Probability of the cosine lobe: the multiple-scattering share of the albedo at
-        ``wi``, ``F_ms (1 - E(wi)) / (F_avg E(wi) + F_ms (1 - E(wi)))`` (channel means), kept
-        in ``[MIX_FLOOR, 1 - MIX_FLOOR]`` so that each lobe covers its own support."""
+        ``wi``, ``F_ms (1 - E(wi)) / (F_avg E(wi) + F_ms (1 - E(wi)))`` (``F_avg`` of the
+        channel means ``q``), kept in ``[MIX_FLOOR, 1 - MIX_FLOOR]`` so that each lobe covers
+        its own support."""
         d = self.loss_at(ops, wi)
-        ms = q.ms * math.pi * self.loss * d
-        ss = q.ss * (1.0 - d)
+        f_avg = fresnel_average(ops, q.fresnel, q.rs, q.eta, q.k) * self.tint_mean
+        ss = f_avg * (1.0 - d)
+        ms = multiple_scattering_fresnel(f_avg, self.e_avg) * d
         t = ms / ops.maximum(ms + ss, 1e-300)
         return ops.minimum(ops.maximum(t, MIX_FLOOR), 1.0 - MIX_FLOOR)
 
@@ -416,17 +440,12 @@ def _base_tint(base) -> np.ndarray:
     return h / max(float(np.max(h)), 1e-300)
 
 
-def _channels(model, base, c):
-    chans = {n for n in (base.channels, model.channels, np.size(c) if np.ndim(c) else None) if n}
+def _channels(model, base):
+    chans = {n for n in (base.channels, model.channels) if n}
     if len(chans) > 1:
         raise ValueError(f"{type(model).__name__}: the base has {base.channels} colour channels and "
                          f"rs/eta/k have {model.channels}; give them the same count")
     return chans.pop() if chans else None
-
-
-def _as_data(c):
-    c = np.asarray(c, dtype=np.float64)
-    return float(c) if c.ndim == 0 else c
 
 
 __all__ = ["METHODS", "ForeignBase", "IncidentScaled", "KullaConty", "as_base", "compensate",
