@@ -52,6 +52,7 @@ from . import kernel_params, vec
 from .ops import NP
 from .params import Param
 from .text import fmt
+from .vec import HORIZON
 
 #: Largest number of direction pairs evaluated in one NumPy pass; bigger batches
 #: are processed in chunks so memory stays bounded.
@@ -553,17 +554,6 @@ class BxDF:
 
         return html_table(f"{self.name} ({type(self).__name__})", ["parameter", "value"],
                           [(k, fmt(v, other=str)) for k, v in self.params.items()])
-
-
-#: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).
-#: Models that divide by ``cos(theta)`` (original Phong/Blinn, Ward, Cook-Torrance
-#: with G = 1) would otherwise overflow for denormal cosines.
-HORIZON = 1e-12
-
-
-def above(ops, wi, wo):
-    """Both directions above the horizon (``cos(theta) > HORIZON``)."""
-    return (wi[2] > HORIZON) & (wo[2] > HORIZON)
 
 
 # -- a model's lobes as a mixture -----------------------------------------------------

@@ -56,7 +56,8 @@ import math
 
 import numpy as np
 
-from ..bxdf import CHUNK, HORIZON, Sample, _as_array, _as_unit_interval, _check_directions
+from ..bxdf import CHUNK, Sample, _as_array, _as_unit_interval, _check_directions
+from ..vec import HORIZON
 
 __all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml", "ensure_variant"]
 

@@ -59,10 +59,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import fresnel, vec
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
 from ..params import Param
 from ..registry import register
 from ..registry import spec_of as registry_spec_of
+from ..vec import above
 
 #: Tables built in this process: key -> AngleTable.
 _TABLES: dict = {}
