@@ -50,7 +50,7 @@ import numpy as np
 from . import backend as _backend
 from . import kernel_params, vec
 from .ops import NP
-from .params import Param
+from .params import Param, spec_value
 from .text import fmt
 from .vec import HORIZON
 
@@ -547,6 +547,17 @@ class BxDF:
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={fmt(v, other=repr)}" for k, v in self.params.items())
         return f"{type(self).__name__}({args})"
+
+    def spec(self) -> str:
+        """The model as a registry spec, ``"name:k=v:..."``, that
+        :func:`plausible.make` reads back into an equal model: floats exactly
+        (``repr``), colours as ``r,g,b``, groups of tuples as ``a,b;c,d;``, a nested
+        model in square brackets (:func:`plausible.params.spec_value`).  A model
+        whose own class is not registered gives its ``repr``."""
+        inf = self.info
+        if inf is None or inf.cls is not type(self):
+            return repr(self)
+        return ":".join([inf.name] + [f"{k}={spec_value(v)}" for k, v in self.params.items()])
 
     def _repr_html_(self) -> str:
         """The model in a notebook: its name and parameters as a table."""
