@@ -420,8 +420,8 @@ class BxDF:
         """Whether the lobe is cut off along the great circle ``R.wo = 0`` (``R`` the
         mirror direction): a ``cos^n(alpha)`` lobe clamped to ``R.wo > 0``, which
         jumps there when ``n = 0``.  A hint for the albedo integrator of
-        :mod:`plausible.analysis.albedo`: it makes that circle a panel edge of its
-        half-vector frame (:func:`~plausible.analysis.quadrature.half_vector_lune`).
+        :mod:`plausible.integrals.albedo`: it makes that circle a panel edge of its
+        half-vector frame (:func:`~plausible.integrals.quadrature.half_vector_lune`).
         The default: no such cut."""
         return False
 

@@ -370,7 +370,7 @@ class MitsubaBSDF:
     def annotate(self, report):
         """Add ``energy+delta`` (delta reflectance plus the smooth albedo of the
         ``energy`` grid; max over it <= 1 + 1e-4) when the plugin has delta lobes."""
-        from .albedo import direction
+        from ..integrals.albedo import direction
         from .checks import PropertyResult
 
         if not self.delta_components or (self.mode, self.side) != ("radiance", "front"):
