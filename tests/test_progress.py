@@ -22,6 +22,7 @@ from click.testing import CliRunner
 from rich.console import Console
 
 import plausible
+import plausible.integrals.cache
 import plausible.models.pumped_up as pu
 from plausible import cli, make, registry
 from plausible.analysis import albedo_curve, albedo_table, check
@@ -70,7 +71,7 @@ class TestProtocol:
 
     def test_pumped_up_reports_the_tables_it_builds(self, tmp_path, monkeypatch):
         monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", str(tmp_path))
-        monkeypatch.setattr(pu, "_TABLES", {})
+        monkeypatch.setattr(plausible.integrals.cache, "_TABLES", {})
         c = Counter()
         with reporting(c):      # as the command line does: reaches a model built from a spec
             registry.make_from_spec("pumped-up:base=[lambertian:rd=0.7]")
