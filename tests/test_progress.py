@@ -80,6 +80,14 @@ class TestProtocol:
         pu.PumpedUp(base="lambertian:rd=0.7", progress=c2)   # cached now: nothing to report
         assert c2.counts == {}
 
+    def test_pumped_up_given_a_counter_completes_every_task_it_announces(self, tmp_path, monkeypatch):
+        """Its horizon probe took the factory for a tick: it announced a task of 1 step that never ticked."""
+        monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", str(tmp_path))
+        monkeypatch.setattr(plausible.integrals.cache, "_TABLES", {})
+        c = Counter()
+        pu.PumpedUp(base="lambertian:rd=0.6", progress=c)
+        assert c.counts and _complete(c.counts), c.counts
+
     def test_the_ambient_reporter_ends_with_its_block(self):
         c = Counter()
         with reporting(c):

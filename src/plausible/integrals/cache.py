@@ -123,17 +123,18 @@ HORIZON_COS = (1e-6, 1e-9)
 def horizon_albedos(model, progress=None) -> np.ndarray:
     """The largest directional albedo of ``model`` over a few azimuths (one for an
     isotropic model, four otherwise) at ``cos(theta)`` = each of :data:`HORIZON_COS`
-    (cached like the tables).  ``progress``, if given, is called with the number of
-    albedo evaluations just done."""
+    (cached like the tables).  ``progress``: a :mod:`plausible.progress` factory,
+    told the albedo evaluations when they are computed (none when cached); None:
+    the ambient reporter."""
     def compute():
         phis = (0.0,) if is_isotropic(model) else tuple(k * np.pi / 4 for k in range(4))
+        tick = start(progress, len(HORIZON_COS) * len(phis), "horizon albedo")
         out = []
         for c in HORIZON_COS:
             s = np.sqrt(1.0 - c * c)
             out.append(max(float(np.max(albedo(model, np.array([s * np.cos(p), s * np.sin(p), c])).value))
                            for p in phis))
-            if progress:
-                progress(len(phis))
+            tick(len(phis))
         return np.array(out)
 
     return _cached("horizon", model, compute)
