@@ -152,6 +152,23 @@ def format_groups(value) -> str:
     return "; ".join(" ".join(repr(float(x)) for x in g) for g in value)
 
 
+def spec_value(v) -> str:
+    """A parameter value as spec text that :func:`parse_value` reads back: floats
+    exactly (``repr``), colours as ``r,g,b``, groups of tuples as ``a,b;c,d;``, a
+    nested model as its own spec in square brackets."""
+    if hasattr(v, "spec") and hasattr(v, "eval"):      # a nested model
+        return f"[{v.spec()}]"
+    if hasattr(v, "tolist"):
+        v = v.tolist()
+    if isinstance(v, (list, tuple)):
+        if any(isinstance(x, (list, tuple)) or hasattr(x, "tolist") for x in v):
+            return "".join(spec_value(x) + ";" for x in v)
+        return ",".join(spec_value(x) for x in v)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return str(v)
+    return repr(float(v)) if isinstance(v, float) else str(v)
+
+
 def parse_value(text: str):
     """Parse a command-line value: ``0.5``, ``0.9,0.6,0.2`` (a colour), groups
     separated by ``;`` (``-1,-1,1,20,1.5;1,1,1,8,0.3``: a list of tuples, e.g.

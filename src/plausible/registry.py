@@ -139,31 +139,14 @@ def split_spec(spec: str) -> list[str]:
 
 def spec_of(model) -> str:
     """The spec string of a model, ``"name:k=v:..."``, that :func:`make_from_spec`
-    reads back into an equal model: floats exactly (``repr``), colours as
-    ``r,g,b``, groups of tuples as ``a,b;c,d;``, a nested model in square
-    brackets.  A model outside the registry gives its ``repr``.
+    reads back into an equal model (:meth:`plausible.bxdf.BxDF.spec`); anything
+    else gives its ``repr``.
 
     >>> spec_of(make("pumped-up"))
     'pumped-up:base=[reciprocal-phong:ks=1.0:n=20.0]:correction=max:times=1:fresnel=none:rs=1.0:eta=0.2:k=3.0'
     """
-    inf = getattr(model, "info", None)
-    if inf is None or _REGISTRY.get(inf.name) is not inf:
-        return repr(model)
-    return ":".join([inf.name] + [f"{k}={_spec_value(v)}" for k, v in model.params.items()])
-
-
-def _spec_value(v) -> str:
-    if hasattr(v, "params") and hasattr(v, "eval"):      # a nested model
-        return f"[{spec_of(v)}]"
-    if hasattr(v, "tolist"):
-        v = v.tolist()
-    if isinstance(v, (list, tuple)):
-        if any(isinstance(x, (list, tuple)) or hasattr(x, "tolist") for x in v):
-            return "".join(_spec_value(x) + ";" for x in v)
-        return ",".join(_spec_value(x) for x in v)
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return str(v)
-    return repr(float(v)) if isinstance(v, float) else str(v)
+    spec = getattr(model, "spec", None)
+    return spec() if callable(spec) else repr(model)
 
 
 def make_from_spec(spec: str, **extra):

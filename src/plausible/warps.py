@@ -8,7 +8,7 @@ the same code runs on NumPy and on Dr.Jit.
 from __future__ import annotations
 
 from . import vec
-from .bxdf import HORIZON
+from .vec import HORIZON
 from .ops import INV_PI, PI
 
 

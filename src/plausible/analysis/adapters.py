@@ -43,7 +43,8 @@ import sys
 
 import numpy as np
 
-from ..bxdf import CHUNK, HORIZON, Sample, _as_unit_interval, as_directions
+from ..bxdf import CHUNK, Sample, _as_unit_interval, as_directions
+from ..vec import HORIZON
 
 __all__ = ["CallableBxDF", "as_bxdf", "load_python", "tolerances"]
 

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from ..library import fit_set, fits as all_fits, material, materials
-from .albedo import TOL as ALBEDO_TOL, albedos, direction
+from ..integrals.albedo import TOL as ALBEDO_TOL, albedos, direction
 from .checks import reciprocity
 
 #: Incidence angles (degrees) of the albedo grid: dense toward grazing, where
@@ -90,7 +90,7 @@ def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG, tol: float = ALBEDO_TOL):
     """``(values, errors)`` of shape ``(len(thetas_deg), channels)``: the directional
     albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``,
     each part's albedos at every angle refined together
-    (:func:`~plausible.analysis.albedo.albedos`) to the error bound ``tol``."""
+    (:func:`~plausible.integrals.albedo.albedos`) to the error bound ``tol``."""
     ch = model.channels or 1
     vals = np.zeros((len(thetas_deg), ch))
     errs = np.zeros((len(thetas_deg), ch))

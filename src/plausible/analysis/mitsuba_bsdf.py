@@ -56,7 +56,8 @@ import math
 
 import numpy as np
 
-from ..bxdf import CHUNK, HORIZON, Sample, _as_array, _as_unit_interval, _check_directions
+from ..bxdf import CHUNK, Sample, _as_array, _as_unit_interval, _check_directions
+from ..vec import HORIZON
 
 __all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml", "ensure_variant"]
 
@@ -369,7 +370,7 @@ class MitsubaBSDF:
     def annotate(self, report):
         """Add ``energy+delta`` (delta reflectance plus the smooth albedo of the
         ``energy`` grid; max over it <= 1 + 1e-4) when the plugin has delta lobes."""
-        from .albedo import direction
+        from ..integrals.albedo import direction
         from .checks import PropertyResult
 
         if not self.delta_components or (self.mode, self.side) != ("radiance", "front"):

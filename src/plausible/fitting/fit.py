@@ -34,7 +34,7 @@ specifications with their ranges); the albedo comes from
    parameters along it are listed in ``FitResult.unconstrained`` and a
    :class:`UnconstrainedWarning` names them.
 6. **Albedo** inside the optimiser: a fixed graded Gauss-Legendre rule per
-   incidence angle (:func:`plausible.analysis.quadrature.hemisphere_grid`,
+   incidence angle (:func:`plausible.integrals.quadrature.hemisphere_grid`,
    ``m = 4``, ``levels = 8``; measured against the accurate integrator: 5e-7
    relative for an exponent of 30, 2e-4 for Cook-Torrance ``m = 0.2``, 6e-3 for
    exponents of 10^4, 9e-2 for Ward ``alpha = 0.01``); every **reported** albedo error uses the accurate integrator
@@ -281,7 +281,7 @@ class _FastAlbedo:
     """Albedo by a fixed graded rule per incidence angle (smooth in the parameters)."""
 
     def __init__(self, thetas, peaks_of):
-        from ..analysis.quadrature import hemisphere_grid
+        from ..integrals.quadrature import hemisphere_grid
 
         self.grids = []
         for t in thetas:

@@ -172,7 +172,7 @@ def mitsuba_progress(mi, plugin: str):
     long computation at load (``pumped_up``'s albedo tables, 17.6 s cold for an
     anisotropic base) is announced once at ``Warn`` (Mitsuba's default level
     shows it) with where its result is cached, then every 10 % at ``Info``."""
-    from ..models.pumped_up import table_cache_dir
+    from ..integrals.cache import table_cache_dir
 
     def factory(total: int, label: str = ""):
         cache = table_cache_dir()
