@@ -67,10 +67,11 @@ import math
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import HORIZON, BxDF, Lobe, above, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
 from ..ops import INV_PI
 from ..params import Param
 from ..registry import register
+from ..vec import HORIZON, above
 
 #: The dielectric reflectance at normal incidence of ``ior = 1.5``: ``((1 - 1.5) / (1 + 1.5))^2``.
 DIELECTRIC_F0 = 0.04
