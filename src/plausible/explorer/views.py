@@ -174,8 +174,8 @@ def lobe3d(model, theta_i_deg: float, n_theta: int = 24, n_phi: int = 48) -> dic
 def half_diff_slice(model, n: int = 64, phi_d_deg: float = 90.0) -> dict:
     """``f`` (channel mean) over ``theta_h`` (rows) x ``theta_d`` (columns), both
     0..90 degrees at cell centres, ``phi_h = 0`` and ``phi_d`` (Rusinkiewicz
-    coordinates, :func:`plausible.fitting.merl.from_half_diff`)."""
-    from ..fitting.merl import from_half_diff
+    coordinates, :func:`plausible.models.merl.from_half_diff`)."""
+    from ..models.merl import from_half_diff
 
     a = (np.arange(n) + 0.5) / n * 90.0
     TH, TD = np.meshgrid(np.radians(a), np.radians(a), indexing="ij")

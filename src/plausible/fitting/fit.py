@@ -186,7 +186,7 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
         if not p.exists() and (p.suffix.lower() in (".csv", ".binary", ".txt") or "/" in str(target)):
             raise ValueError(f"target file {str(target)!r} not found")
         if p.exists():
-            from .merl import is_merl_file, read_merl
+            from ..models.merl import is_merl_file, read_merl
 
             if is_merl_file(p):
                 return as_target(read_merl(p), thetas_deg=thetas_deg)

@@ -588,12 +588,12 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
 
 def make_merl_class():
     """The ``merl`` plugin: a measured BRDF in the MERL binary format
-    (:class:`plausible.fitting.merl.MerlBRDF`, nearest-cell lookup, cosine
+    (:class:`plausible.models.merl.MerlBRDF`, nearest-cell lookup, cosine
     sampling) read from ``<string name="filename" value="..."/>``.  RGB variants
     only (the table holds red, green and blue)."""
     import mitsuba as mi
 
-    from ..fitting.merl import MerlBRDF, read_merl
+    from ..models.merl import MerlBRDF, read_merl
     from ..params import ModelInfo
 
     info = ModelInfo(name="merl", cls=MerlBRDF, params=(), reciprocal=True, energy_conserving=False,
