@@ -38,7 +38,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .. import progress, registry, vec
-from ..analysis import is_isotropic
+from ..integrals.albedo import is_isotropic
 from ..bxdf import add_values, mixture_f, mixture_pdf, mixture_sample
 from . import props as P
 
