@@ -38,7 +38,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .. import progress, registry, vec
-from ..analysis import is_isotropic
+from ..integrals.albedo import is_isotropic
 from ..bxdf import add_values, mixture_f, mixture_pdf, mixture_sample
 from . import props as P
 
@@ -172,7 +172,7 @@ def mitsuba_progress(mi, plugin: str):
     long computation at load (``pumped_up``'s albedo tables, 17.6 s cold for an
     anisotropic base) is announced once at ``Warn`` (Mitsuba's default level
     shows it) with where its result is cached, then every 10 % at ``Info``."""
-    from ..models.pumped_up import table_cache_dir
+    from ..integrals.cache import table_cache_dir
 
     def factory(total: int, label: str = ""):
         cache = table_cache_dir()
@@ -588,12 +588,12 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
 
 def make_merl_class():
     """The ``merl`` plugin: a measured BRDF in the MERL binary format
-    (:class:`plausible.fitting.merl.MerlBRDF`, nearest-cell lookup, cosine
+    (:class:`plausible.models.merl.MerlBRDF`, nearest-cell lookup, cosine
     sampling) read from ``<string name="filename" value="..."/>``.  RGB variants
     only (the table holds red, green and blue)."""
     import mitsuba as mi
 
-    from ..fitting.merl import MerlBRDF, read_merl
+    from ..models.merl import MerlBRDF, read_merl
     from ..params import ModelInfo
 
     info = ModelInfo(name="merl", cls=MerlBRDF, params=(), reciprocal=True, energy_conserving=False,
