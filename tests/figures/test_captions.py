@@ -10,10 +10,7 @@ from pathlib import Path
 
 import pytest
 
-import plausible.figures.paper_as  # noqa: F401  (registers the figures)
-import plausible.figures.paper_neumann  # noqa: F401
-import plausible.figures.paper_notes  # noqa: F401
-from plausible.figures import FIGURES
+from plausible import figures
 
 ROOT = Path(__file__).resolve().parents[2]
 CANDIDATES = [Path(os.environ["PLAUSIBLE_PAPERS"])] if "PLAUSIBLE_PAPERS" in os.environ else []
@@ -52,20 +49,20 @@ def missing(caption: str, texts) -> list[str]:
     return [f for f in fragments(caption) if not any(_squash(f) in t for t in texts)]
 
 
-PAPER_FIGURES = [n for n, f in FIGURES.items() if f.source.startswith(("Neumann", "Ashikhmin", "Modified Phong"))]
+PAPER_FIGURES = [n for n in figures.names() if figures.get(n).source.startswith(("Neumann", "Ashikhmin", "Modified"))]
 
 
 @pytest.mark.skipif(PAPERS is None, reason="the papers' text is not available here")
 @pytest.mark.parametrize("name", PAPER_FIGURES)
 def test_caption_quotes_the_paper(name):
-    assert fragments(FIGURES[name].caption), name
-    assert missing(FIGURES[name].caption, _paper_texts()) == []
+    assert fragments(figures.get(name).caption), name
+    assert missing(figures.get(name).caption, _paper_texts()) == []
 
 
 @pytest.mark.skipif(PAPERS is None, reason="the papers' text is not available here")
 def test_a_misquoted_caption_is_caught():
     texts = _paper_texts()
-    good = FIGURES["neumann-fig5"].caption
+    good = figures.get("neumann-fig5").caption
     assert missing(good, texts) == []
     assert missing(good.replace("below the constant 1", "at the constant 1"), texts)
     assert missing(good.replace("(n = 20)", "(n = 30)"), texts)
