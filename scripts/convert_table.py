@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from plausible import library
+from plausible import catalogue as library
 from plausible.conversion import TOLERANCE, convert
 
 JSON = Path("docs/convert-table.json")

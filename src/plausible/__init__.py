@@ -16,7 +16,7 @@ from .backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
 from .conversion import convert  # (after fitting: it fits)
-from .library import material, materials
+from .catalogue import material, materials
 from .models.sum import Sum
 from .registry import info, make, names, register
 from .vec import angles, direction

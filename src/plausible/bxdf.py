@@ -50,8 +50,9 @@ import numpy as np
 from . import backend as _backend
 from . import kernel_params, vec
 from .ops import NP
-from .params import Param
+from .params import Param, spec_value
 from .text import fmt
+from .vec import HORIZON
 
 #: Largest number of direction pairs evaluated in one NumPy pass; bigger batches
 #: are processed in chunks so memory stays bounded.
@@ -419,8 +420,8 @@ class BxDF:
         """Whether the lobe is cut off along the great circle ``R.wo = 0`` (``R`` the
         mirror direction): a ``cos^n(alpha)`` lobe clamped to ``R.wo > 0``, which
         jumps there when ``n = 0``.  A hint for the albedo integrator of
-        :mod:`plausible.analysis.albedo`: it makes that circle a panel edge of its
-        half-vector frame (:func:`~plausible.analysis.quadrature.half_vector_lune`).
+        :mod:`plausible.integrals.albedo`: it makes that circle a panel edge of its
+        half-vector frame (:func:`~plausible.integrals.quadrature.half_vector_lune`).
         The default: no such cut."""
         return False
 
@@ -547,23 +548,23 @@ class BxDF:
         args = ", ".join(f"{k}={fmt(v, other=repr)}" for k, v in self.params.items())
         return f"{type(self).__name__}({args})"
 
+    def spec(self) -> str:
+        """The model as a registry spec, ``"name:k=v:..."``, that
+        :func:`plausible.make` reads back into an equal model: floats exactly
+        (``repr``), colours as ``r,g,b``, groups of tuples as ``a,b;c,d;``, a nested
+        model in square brackets (:func:`plausible.params.spec_value`).  A model
+        whose own class is not registered gives its ``repr``."""
+        inf = self.info
+        if inf is None or inf.cls is not type(self):
+            return repr(self)
+        return ":".join([inf.name] + [f"{k}={spec_value(v)}" for k, v in self.params.items()])
+
     def _repr_html_(self) -> str:
         """The model in a notebook: its name and parameters as a table."""
         from .text import html_table
 
         return html_table(f"{self.name} ({type(self).__name__})", ["parameter", "value"],
                           [(k, fmt(v, other=str)) for k, v in self.params.items()])
-
-
-#: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).
-#: Models that divide by ``cos(theta)`` (original Phong/Blinn, Ward, Cook-Torrance
-#: with G = 1) would otherwise overflow for denormal cosines.
-HORIZON = 1e-12
-
-
-def above(ops, wi, wo):
-    """Both directions above the horizon (``cos(theta) > HORIZON``)."""
-    return (wi[2] > HORIZON) & (wo[2] > HORIZON)
 
 
 # -- a model's lobes as a mixture -----------------------------------------------------

@@ -57,10 +57,11 @@ import math
 import numpy as np
 
 from .. import fresnel, special, vec, warps
-from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
+from ..vec import above
 
 VARIANTS = ("westin", "errata", "paper")
 ROUGH = ("series", "beckmann")

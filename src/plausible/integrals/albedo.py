@@ -1,7 +1,7 @@
 """Directional and hemispherical albedo.
 
 The directional albedo ``a(wi) = int f(wi, wo) cos(theta_o) d omega_o`` is
-computed by deterministic quadrature (:mod:`plausible.analysis.quadrature`) in
+computed by deterministic quadrature (:mod:`plausible.integrals.quadrature`) in
 the half-vector frame (:func:`~.quadrature.half_vector_breaks`: the mirror
 direction is an edge of the domain at every incidence, the horizon another): a
 tensor Gauss-Legendre rule on panels graded toward the lobe, evaluated at two

@@ -41,7 +41,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
+from ..vec import above
 
 RES = (90, 90, 180)                       # theta_h, theta_d, phi_d
 NCELLS = RES[0] * RES[1] * RES[2]
