@@ -597,7 +597,8 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
               help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, "
                    "principled), gltf, or a registered model.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
-              help="Output: .json (a dict of Mitsuba dicts by material name) or .xml (<bsdf id=...> elements).")
+              help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
+                   "or .gltf (with --to gltf).")
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
 @click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
@@ -611,8 +612,8 @@ def convert_cmd(source, to, out, metric, as_json):
 
     from .conversion import convert
 
-    if Path(out).suffix.lower() not in (".json", ".xml", ".gltf", ".glb"):
-        _fail(f"--out must end in .json or .xml, got {out!r}")
+    if Path(out).suffix.lower() not in (".json", ".xml", ".gltf"):
+        _fail(f"--out must end in .json, .xml or .gltf, got {out!r}")
     try:
         res = convert(source, to=to, metric=metric)
         path = res.write(out)

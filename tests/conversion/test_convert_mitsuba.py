@@ -42,7 +42,8 @@ def _affine_gap(probe, fam, point, seed=0):
 
 
 @pytest.mark.parametrize("name, point", [("roughconductor", {"alpha": 0.2}), ("roughplastic", {"alpha": 0.3}),
-                                         ("principled", {"roughness": 0.5, "metallic": 0.4})])
+                                         ("principled", {"roughness": 0.5, "metallic": 0.4}),
+                                         ("blendbsdf", {"bsdf_1.alpha": 0.2, "weight": 0.3})])
 def test_each_family_is_affine_in_its_colours_on_mitsuba(probe, name, point):
     assert _affine_gap(probe, CM.FAMILIES[name], point) < 1e-5
 
@@ -84,9 +85,14 @@ def test_the_rule_of_thumb_and_a_perturbed_result_fail_the_same_check(tmp_path):
     ok, diff = albedo_check(src, thumb)
     assert not ok and np.abs(diff).max() > 2 * TOLERANCE
     good = convert(str(tmp_path / "lib.mtl")).items[0].params
-    key = next(k for k, v in good.items() if isinstance(v, dict))
-    bad = {**good, key: {"type": "rgb", "value": [0.85 * v for v in good[key]["value"]]}}
-    assert albedo_check(src, good)[0] and not albedo_check(src, bad)[0]
+    assert albedo_check(src, good)[0] and not albedo_check(src, _scaled(good, 0.85))[0]
+
+
+def _scaled(d, s):
+    """``d`` with every RGB colour times ``s`` (nested dicts too)."""
+    if d.get("type") == "rgb":
+        return {"type": "rgb", "value": [s * v for v in d["value"]]}
+    return {k: (_scaled(v, s) if isinstance(v, dict) else v) for k, v in d.items()}
 
 
 def test_a_source_that_is_not_energy_conserving_is_warned_about(tmp_path):
@@ -114,8 +120,8 @@ def test_textures_of_an_mtl_are_carried_into_the_mitsuba_dict(tmp_path):
     assert any("map_bump b.png: carried by reference only" in n for n in c.notes)
 
 
-@pytest.mark.parametrize("to, words", [("gltf", "glTF output is not available"),
-                                       ("mitsuba:plastic", "mitsuba:roughconductor"),
+@pytest.mark.parametrize("to, words", [("mitsuba:plastic", "mitsuba:roughconductor"),
+                                       ("mitsuba:gltf-pbr", "is not fitted"),
                                        ("no-such-model", "unknown model")])
 def test_bad_targets_are_refused_with_what_is_allowed(to, words):
     with pytest.raises(ValueError, match=words):
@@ -153,8 +159,8 @@ def test_the_command_writes_the_file_and_reports_every_field(tmp_path):
     assert any(n.startswith("Ka:") for n in item["notes"])
 
 
-@pytest.mark.parametrize("args, words", [(["--to", "gltf", "--out", "x.gltf"], "glTF output is not available"),
-                                         (["--to", "mitsuba", "--out", "x.txt"], "--out must end in .json or .xml")])
+@pytest.mark.parametrize("args, words", [(["--to", "mitsuba", "--out", "x.gltf"], "convert with to='gltf'"),
+                                         (["--to", "mitsuba", "--out", "x.txt"], "--out must end in .json, .xml or .gltf")])
 def test_the_command_refuses_bad_targets_and_outputs(tmp_path, args, words):
     from click.testing import CliRunner
 
@@ -162,3 +168,16 @@ def test_the_command_refuses_bad_targets_and_outputs(tmp_path, args, words):
 
     r = CliRunner().invoke(main, ["convert", "lambertian", *args])
     assert r.exit_code == 2 and words in r.output
+
+
+def test_a_gltf_source_converted_to_gltf_gives_back_its_parameters(tmp_path):
+    res = convert("gltf-pbr:base_color=0.9,0.6,0.3:metallic=1.0:roughness=0.3", to="gltf")
+    (c,) = res.items
+    assert c.target == "gltf" and set(c.params) == {"base_color", "metallic", "roughness"}
+    assert c.params["roughness"] == pytest.approx(0.3, rel=0.02) and c.params["metallic"] == pytest.approx(1.0)
+    assert np.allclose(c.params["base_color"], [0.9, 0.6, 0.3], atol=0.01)
+    assert max(v["max_abs_difference"] for v in c.albedo.values()) <= 0.01 and not c.warnings
+    doc = json.loads(res.write(tmp_path / "out.gltf").read_text())
+    (mat,) = doc["materials"]
+    assert mat["name"] == "gltf-pbr"
+    assert mat["pbrMetallicRoughness"]["baseColorFactor"][:3] == pytest.approx(c.params["base_color"])

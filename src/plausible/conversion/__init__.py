@@ -113,11 +113,31 @@ class Conversion:
             p.write_text(json.dumps(self.mitsuba_dicts(), indent=2) + "\n")
         elif suffix == ".xml":
             p.write_text(mitsuba_xml(self.mitsuba_dicts()))
-        elif suffix in (".gltf", ".glb"):
-            raise ValueError(_GLTF_REFUSAL)
+        elif suffix == ".gltf":
+            write = _gltf_writer()
+            if self.to != "gltf":
+                raise ValueError(f"out: a .gltf file holds glTF materials; convert with to='gltf' (this "
+                                 f"conversion is to {self.to!r})")
+            write({c.name: c.result for c in self.items}, p)
         else:
-            raise ValueError(f"out: the output file must end in .json or .xml, got {str(path)!r}")
+            raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {str(path)!r}")
         return p
+
+
+#: The registered model of the glTF 2.0 metallic-roughness BRDF (issue 32's glTF part).
+GLTF_MODEL = "gltf-pbr"
+
+
+def _gltf_writer():
+    """``plausible.export.gltf.write_gltf`` when the glTF target is installed, else ValueError."""
+    from .. import registry
+
+    try:
+        registry.info(GLTF_MODEL)
+        from ..export.gltf import write_gltf
+    except (ValueError, ImportError):
+        raise ValueError(_GLTF_REFUSAL) from None
+    return write_gltf
 
 
 _GLTF_REFUSAL = ("glTF output is not available yet: the glTF target (the Khronos metallic-roughness BRDF "
@@ -252,15 +272,16 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
     to = str(to).strip()
     family = None
-    if to == "gltf" or to.startswith("gltf:"):
-        raise ValueError(_GLTF_REFUSAL)
+    if to == "gltf":
+        _gltf_writer()          # refused with a clear message until the glTF target is installed
+        family = GLTF_MODEL
     if to.startswith("mitsuba:"):
         family = to.split(":", 1)[1]
-        if family not in CM.FAMILIES:
+        if family not in CM.FAMILIES or family in CM.PLAUSIBLE_TYPES:
             raise ValueError(f"to: Mitsuba target type {family!r} is not fitted; choose one of "
-                             f"{', '.join('mitsuba:' + k for k in CM.FAMILIES)} (or 'mitsuba' to let the "
+                             f"{', '.join('mitsuba:' + k for k in CM.FAMILIES if k not in CM.PLAUSIBLE_TYPES)} (or 'mitsuba' to let the "
                              f"source choose)")
-    elif to != "mitsuba":
+    elif to not in ("mitsuba", "gltf"):
         from .. import registry
 
         registry.info(to)    # a clear error for an unknown name
@@ -268,7 +289,7 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     for src in read_sources(source):
         src_alb = _source_albedo(src.model)
         warn = _conserving(src, src_alb)
-        if to.startswith("mitsuba"):
+        if to.startswith("mitsuba") or to == "gltf":
             items.append(_to_mitsuba(src, family, metric, src_alb, warn))
         else:
             items.append(_to_model(src, to, metric, starts, src_alb, warn))
@@ -290,28 +311,38 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
     else:
         r = CM.fit_family(src.model, family, metric)
-    d = dict(r.dict)
     textures = dict(src.textures)
-    d = _with_textures(d, family, textures, notes)
+    d = _with_textures(r.dict, family, textures, notes)
     tgt_alb = CM.sampler_albedo(r.dict)
     alb = _albedo_report(src_alb, tgt_alb)
     warn = warn + _albedo_warnings(alb)
+    if family in CM.PLAUSIBLE_TYPES:
+        from .. import registry
+
+        model = registry.make(family, **CM.model_params(d))
+        return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
+                         model)
     return Converted(src.name, src.spec, f"mitsuba:{family}", d, r.errors, alb, warn, notes, textures, d)
 
 
 #: Which Mitsuba parameter an MTL texture replaces, per family.
 TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_reflectance",
-                            "principled": "base_color"},
-                 "map_Ks": {"roughconductor": "specular_reflectance"}}
+                            "principled": "base_color", "blendbsdf": "bsdf_0.reflectance"},
+                 "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance"}}
 
 
 def _with_textures(d, family, textures, notes):
+    import copy
+
+    from . import mitsuba as CM
+
+    d = copy.deepcopy(d)
     for stmt, slots in TEXTURE_SLOTS.items():
         if stmt in textures and family in slots:
             key = slots[family]
             notes.append(f"{stmt} {textures[stmt]}: a bitmap texture in place of the fitted {key} "
-                         f"{d[key]['value']} (the fit used the constant colour)")
-            d[key] = {"type": "bitmap", "filename": textures[stmt]}
+                         f"{CM.get_entry(d, key)['value']} (the fit used the constant colour)")
+            CM.set_entry(d, key, {"type": "bitmap", "filename": textures[stmt]})
     for stmt in textures:
         if stmt not in TEXTURE_SLOTS or family not in TEXTURE_SLOTS[stmt]:
             notes.append(f"{stmt} {textures[stmt]}: carried by reference only (no {family} parameter takes it)")

@@ -24,7 +24,7 @@ NumPy.  The steps (:func:`fit_family`):
 1. **Probe**: the fitting pairs of :func:`plausible.fitting.metrics.sample_pairs`
    about the source's peaks and the mirror direction, and per incidence of
    :data:`plausible.fitting.metrics.THETAS_DEG` the graded hemisphere rule of
-   :func:`plausible.analysis.quadrature.hemisphere_grid` (``m = 4``,
+   :func:`plausible.integrals.quadrature.hemisphere_grid` (``m = 4``,
    ``levels = 6``) for the albedo.  The source's ``f cos`` on the pairs and its
    albedo (accurate integrator) are the target.
 2. **Scan** every point of the family's grid: bases (cached per probe, so the
@@ -94,15 +94,39 @@ class Family:
 
     def bsdf_dict(self, point: dict, colours: dict) -> dict:
         """The ``mi.load_dict`` description at axis values ``point`` and slot colours
-        (a float, grey, or an RGB triple)."""
-        d = {"type": self.type, **dict(self.fixed)}
-        d.update({k: float(v) for k, v in point.items()})
+        (a float, grey, or an RGB triple); a dotted name ``bsdf_1.alpha`` is an entry
+        of a nested dict."""
+        d = {"type": self.type}
+        for k, v in self.fixed:
+            set_entry(d, k, v)
+        for k, v in point.items():
+            set_entry(d, k, float(v))
         for k, v in colours.items():
             a = np.broadcast_to(np.asarray(v, float), (3,))
-            d[k] = {"type": "rgb", "value": [float(x) for x in a]}
+            set_entry(d, k, {"type": "rgb", "value": [float(x) for x in a]})
         return d
 
 
+def set_entry(d: dict, dotted: str, value):
+    """``d[a][b] = value`` for ``dotted = "a.b"`` (nested dicts made as needed)."""
+    *path, last = dotted.split(".")
+    for k in path:
+        d = d.setdefault(k, {})
+    d[last] = value
+
+
+def get_entry(d: dict, dotted: str):
+    for k in dotted.split("."):
+        d = d[k]
+    return d
+
+
+#: Families that are registered plausible models (the glTF 2.0 BRDF of
+#: :mod:`plausible.models.gltf_pbr`, written from the Khronos specification), evaluated
+#: through plausible; the others are Mitsuba plugins.  ``gltf-pbr`` is affine in
+#: ``base_color`` at fixed ``metallic`` and ``roughness`` (``dielectric_brdf = F_d
+#: specular + (1 - max F_d) base / pi``, ``metal_brdf = specular (base + (1 - base) fw)``).
+PLAUSIBLE_TYPES = ("gltf-pbr",)
 ALPHA = Axis("alpha", tuple(float(x) for x in np.geomspace(0.004, 1.0, 14)), 0.002, 1.0)
 FAMILIES = {
     "diffuse": Family("diffuse", (), (), ("reflectance",)),
@@ -110,6 +134,15 @@ FAMILIES = {
                              ("specular_reflectance",)),
     "roughplastic": Family("roughplastic", (("distribution", "ggx"), ("nonlinear", False)), (ALPHA,),
                            ("diffuse_reflectance", "specular_reflectance")),
+    "blendbsdf": Family("blendbsdf", (("bsdf_0.type", "diffuse"), ("bsdf_1.type", "roughconductor"),
+                                      ("bsdf_1.distribution", "ggx"), ("bsdf_1.material", "none")),
+                        (Axis("bsdf_1.alpha", ALPHA.values, ALPHA.lo, ALPHA.hi),
+                         Axis("weight", (0.2, 0.5, 0.8), 0.02, 0.98, log=False)),
+                        ("bsdf_0.reflectance", "bsdf_1.specular_reflectance")),
+    "gltf-pbr": Family("gltf-pbr", (),
+                       (Axis("roughness", tuple(float(x) for x in np.geomspace(0.06, 1.0, 8)), 0.045, 1.0),
+                        Axis("metallic", (0.0, 0.25, 0.5, 0.75, 1.0), 0.0, 1.0, log=False)),
+                       ("base_color",), offset=True),
     "principled": Family("principled", (),
                          (Axis("roughness", tuple(float(x) for x in np.geomspace(0.06, 1.0, 8)), 0.045, 1.0),
                           Axis("metallic", (0.0, 0.25, 0.5, 0.75, 1.0), 0.0, 1.0, log=False)),
@@ -125,7 +158,7 @@ class Probe:
 
     def __init__(self, peaks_of, thetas_deg=PROBE_THETAS):
         from ..analysis import direction
-        from ..analysis.quadrature import hemisphere_grid
+        from ..integrals.quadrature import hemisphere_grid
 
         self.peaks = lambda wi: _distinct([p for fn in peaks_of for p in fn(wi)])
         self.wi, self.wo = M.sample_pairs(self.peaks, thetas_deg=thetas_deg)
@@ -165,9 +198,20 @@ def _distinct(peaks):
 
 
 def _load(d):
+    """The contract of a family's description: a Mitsuba plugin through the adapter, or
+    (:data:`PLAUSIBLE_TYPES`) a registered model built from the same entries."""
+    if d["type"] in PLAUSIBLE_TYPES:
+        from .. import registry
+
+        return registry.make(d["type"], **model_params(d))
     from ..analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict
 
     return MitsubaBSDF(load_bsdf_dict(d))
+
+
+def model_params(d: dict) -> dict:
+    """A family description of a registered model as its parameters (RGB dicts -> lists)."""
+    return {k: (v["value"] if isinstance(v, dict) else v) for k, v in d.items() if k != "type"}
 
 
 @lru_cache(maxsize=4096)
@@ -417,7 +461,8 @@ def candidates(model, albedo0) -> tuple[list, str]:
     normal incidence, three channels), of which the one of the lowest minimised
     figure is kept.  With ``D`` the declared diffuse albedo and ``S = albedo0 - D``:
     ``diffuse`` alone when ``S < 0.01``; ``roughconductor`` alone when ``D < 0.01``;
-    else ``diffuse``, ``roughplastic`` when ``S <= 0.04`` and grey (channels within
+    else ``diffuse``, ``blendbsdf`` (a diffuse and a ``roughconductor`` without
+    Fresnel, the composition of the published fits), ``roughplastic`` when ``S <= 0.04`` and grey (channels within
     10 %), and ``principled``; ``principled`` for a source that declares no lobes."""
     D = diffuse_albedo(model)
     a0 = np.broadcast_to(np.asarray(albedo0, float), (3,))
@@ -429,7 +474,7 @@ def candidates(model, albedo0) -> tuple[list, str]:
     if D.max() < NONE_BELOW:
         return ["roughconductor"], f"no diffuse part (specular albedo {S.max():.3g})"
     plastic = S.max() <= PLASTIC_SPECULAR and S.max() <= 1.1 * S.min() + 1e-3
-    return (["diffuse"] + (["roughplastic"] if plastic else []) + ["principled"],
+    return (["diffuse", "blendbsdf"] + (["roughplastic"] if plastic else []) + ["principled"],
             f"a diffuse part ({D.max():.3g}) and a specular one ({S.max():.3g})"
             + (" within a plastic's coat" if plastic else ""))
 
@@ -437,7 +482,8 @@ def candidates(model, albedo0) -> tuple[list, str]:
 # -- Mitsuba's own sampler ------------------------------------------------------------------------
 
 def sampler_albedo(bsdf_dict: dict, thetas_deg=REPORT_THETAS, side: int = 256) -> np.ndarray:
-    """The directional albedo ``E[weight]`` of Mitsuba's own ``sample`` at ``thetas_deg``
+    """The directional albedo ``E[weight]`` of Mitsuba's own ``sample`` (a registered
+    model of :data:`PLAUSIBLE_TYPES`: its own sampler) at ``thetas_deg``
     (``side^2`` stratified samples each, the lobe choice by a golden-ratio
     sequence): shape (T, 3).  At ``side = 256`` its standard error is below 1e-3 for
     the families here."""
