@@ -341,7 +341,7 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
     import json
 
     from .analysis import materials as M
-    from .library import fit_set, materials, suggest
+    from .catalogue import fit_set, materials, suggest
 
     if not all_materials:
         _fail("--fit, --material, --out and --jobs go with --materials")
@@ -802,7 +802,7 @@ def materials(fit, fits_only, as_json):
     fit sets, then every material with its fits.  Use one as material:NAME@FIT.
     A fit set that cannot be loaded is marked in the first table and left out
     of the materials' lists."""
-    from . import library
+    from . import catalogue as library
 
     try:
         sets = [library.fit_set(fit)] if fit else library.fits()

@@ -152,9 +152,9 @@ def spec_of(model) -> str:
 def make_from_spec(spec: str, **extra):
     """Build a model from ``"name"`` or ``"name:k=v:k=v"`` (colours as ``r,g,b``;
     a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``;
-    a published fit of a real material, ``"material:NAME@FIT"``, see :mod:`plausible.library`)."""
+    a published fit of a real material, ``"material:NAME@FIT"``, see :mod:`plausible.catalogue`)."""
     if spec.strip().startswith("material:"):
-        from .library import from_spec  # the library imports the models, which import us
+        from .catalogue import from_spec  # the library imports the models, which import us
 
         if extra:
             raise ValueError(f"model spec {spec!r}: a material takes no parameters "

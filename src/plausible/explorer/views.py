@@ -84,7 +84,7 @@ MATERIAL = "material"
 
 
 def _material_entry() -> dict:
-    from .. import library
+    from .. import catalogue as library
 
     names = sorted(library.materials())
     fits = [f.key for f in library.fits() if f.built]
@@ -119,7 +119,7 @@ def build(name: str, params: dict | None = None):
     of numbers, strings in the command line's syntax).  Raises the model's own
     :class:`ValueError` (parameter, range, value) for anything out of range."""
     if name == MATERIAL:
-        from .. import library
+        from .. import catalogue as library
 
         ps = dict(params or {})
         unknown = sorted(set(ps) - {"name", "fit"})

@@ -13,7 +13,7 @@ from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
 from plausible.progress import within
 
-from . import figure
+from .core import figure
 from .lobes import plane_f
 
 SRC = "Neumann, Neumann & Szirmay-Kalos 1999"

@@ -3,7 +3,7 @@
     {"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"}
 
 ``name`` is a material of :func:`plausible.materials`, ``fit`` a loadable fit
-set of :func:`plausible.library.fits` (default ``ngan2005/ashikhmin-shirley``).
+set of :func:`plausible.catalogue.fits` (default ``ngan2005/ashikhmin-shirley``).
 The plugin is the generic plausible plugin (:func:`plausible.mitsuba.make_plugin_class`)
 around :class:`MaterialModel`, a :class:`~plausible.models.sum.Sum` built by
 :func:`plausible.material`; no formula lives here.  The fits' colours are RGB,
@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from types import SimpleNamespace
 
-from .. import library
+from .. import catalogue as library
 from ..bxdf import Params
 from ..params import ModelInfo, Param
 
@@ -76,7 +76,7 @@ def make_material_plugin_class():
     the parts' colours converted to ``mi.Color3f`` for Dr.Jit."""
     import mitsuba as mi
 
-    from . import make_plugin_class  # the package imports this module inside register()
+    from .plugin import make_plugin_class
 
     base = make_plugin_class(PLUGIN, INFO.name, info=INFO)
 
