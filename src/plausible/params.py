@@ -41,6 +41,10 @@ class Param:
         hi = "inf" if self.hi == math.inf else f"{self.hi:g}"
         return f"[{lo}, {hi}]"
 
+    def options(self) -> list:
+        """The values a choice may take, for menus (:attr:`choices`)."""
+        return list(self.choices)
+
     def validate(self, value, owner: str = "model", channels: tuple = None):
         """Return the value converted (float, or float64 array for colours).
 
@@ -102,6 +106,9 @@ class ModelInfo:
     reciprocal: bool = True
     energy_conserving: bool = True
     references: tuple = field(default_factory=tuple)
+    #: An entry of a catalogue of data (published materials), not a model family:
+    #: not in :func:`plausible.names`, known to :func:`plausible.info` and ``make``.
+    catalogue: bool = False
 
     def param(self, name: str) -> Param:
         for p in self.params:

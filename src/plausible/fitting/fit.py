@@ -173,7 +173,7 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
     """
     if isinstance(target, Target):
         return target
-    if isinstance(target, str) and target.strip().startswith("material:"):   # a published fit
+    if isinstance(target, str) and registry.is_spec(target):   # e.g. a published fit, material:NAME@FIT
         return as_target(registry.make_from_spec(target.strip()), thetas_deg=thetas_deg)
     if isinstance(target, (str, Path)):
         p = Path(target)
