@@ -219,7 +219,7 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
 
 
 def _table_target(wi, wo, f, label, target_albedo):
-    from ..bxdf import as_directions
+    from ..directions import as_directions
 
     try:
         wi, wo = as_directions("wi", wi), as_directions("wo", wo)
@@ -493,7 +493,7 @@ class _Values:
 
     def __init__(self, tgt: Target, fast: _FastAlbedo | None):
         from .. import backend
-        from ..bxdf import as_directions
+        from ..directions import as_directions
 
         self.tgt, self.fast = tgt, fast
         wi = np.broadcast_to(as_directions("wi", tgt.wi), np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo)))

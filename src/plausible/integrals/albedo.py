@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import backend as _backend
-from ..bxdf import BxDF, as_directions
+from ..bxdf import BxDF
+from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
 from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
