@@ -83,3 +83,16 @@ def test_the_comparison_tells_a_one_percent_roughness_apart():
     got = principled(BASE, 0.505).eval(n, wo)
     want = plausible.make("gltf-pbr", base_color=BASE, metallic=1.0, roughness=0.5).eval(n, wo)
     assert np.max(np.abs(got / want - 1)) > 100 * RTOL
+
+
+def test_the_plugin_reduces_an_rgb_specular_color_as_numpy_does():
+    # the Mitsuba plugin gets specular_color as a Color3f and takes max_value over its channels
+    # (the registry-wide plugin tests use the grey default); float32, so 1e-5 as above
+    kw = dict(base_color=[0.9, 0.5, 0.2], specular=0.7, specular_color=[0.5, 3.0, 1.0], roughness=0.4,
+              metallic=0.2, anisotropy_strength=0.5, anisotropy_rotation=0.8)
+    d = {"type": "gltf_pbr", **{k: ({"type": "rgb", "value": v} if isinstance(v, list) else v)
+                                for k, v in kw.items()}}
+    rng = np.random.default_rng(4)
+    wi, wo = upper(rng, 1000), upper(rng, 1000)
+    np.testing.assert_allclose(MitsubaBSDF(load_bsdf_dict(d)).eval(wi, wo),
+                               plausible.make("gltf-pbr", **kw).eval(wi, wo), rtol=RTOL)
