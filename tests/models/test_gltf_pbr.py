@@ -224,7 +224,7 @@ def test_the_shader_trace_takes_max_value_over_the_uniform_channels():
     # exported with uniforms, specular_color is a vec3 the shader reduces itself: the trace must
     # equal NumPy for a colour whose largest channel is not the first
     from plausible import symbolic
-    from plausible.export import _symbolic_params, uniform_params
+    from plausible.export.shader import _symbolic_params, uniform_params
 
     m = gltf(base_color=[0.9, 0.5, 0.2], specular=0.7, specular_color=[0.5, 3.0, 1.0], roughness=0.4)
     specs = uniform_params(m, True)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import registry
-from ..analysis import albedo_curve, direction
+from ..analysis import albedo_curve
 from ..bxdf import BxDF
 from . import metrics as M
 
