@@ -720,7 +720,9 @@ def explore(port, host, no_browser):
 @click.option("--quick", is_flag=True, help="Small images and sample counts (the CI mode).")
 @click.option("--force", is_flag=True, help="Remake figures even when their inputs have not changed.")
 @click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")
-def figures(out, only, spp, resolution, quick, force, list_only):
+@click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
+              help="Worker processes making figures side by side (default: the cores available, at most 2).")
+def figures(out, only, spp, resolution, quick, force, list_only, jobs):
     """Reproduce the papers' figures as a browsable report (OUT/index.html).
 
     Exits with status 1 when a figure fails or a measured check does not hold.
@@ -736,8 +738,10 @@ def figures(out, only, spp, resolution, quick, force, list_only):
     try:    # unknown names and an unwritable folder fail before anything is made
         only = list(dict.fromkeys(F.get(n).name for n in only))
         check_writable_dir(out, "--out", create=True)
+        from .figures.report import default_jobs
+
         res = F.run(out, only=only or None, spp=spp, resolution=resolution, quick=quick, force=force,
-                    console=console, progress=_bar())
+                    console=console, progress=_bar(), jobs=jobs or default_jobs())
     except ValueError as e:
         _fail(str(e))
     failed = [n for n, m in res.items() if m["status"] != "ok"]
