@@ -261,7 +261,7 @@ def eval_cmd(model, params, wi, wo, as_json):
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), metavar="DIR",
               help="With --materials: write materials-table.md/.csv (and materials.md's summary) here.")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
-              help="With --materials: worker processes (default: the usable cores, at most 2).")
+              help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
           python_obj, all_materials, fit_keys, material_names, out_dir, jobs):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
@@ -284,7 +284,7 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
-    if all_materials or fit_keys or material_names or out_dir or jobs:
+    if all_materials or fit_keys or material_names or out_dir or (jobs and not all_models):
         return _check_materials(all_materials, fit_keys, material_names, out_dir, jobs, quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
     foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
@@ -300,9 +300,17 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     else:
         targets = [_model(model, params)]
     reports, verdicts, rows = [], [], []
+    done = None
+    if all_models and (jobs or _default_jobs()) > 1:   # whole models in worker processes, reports in order
+        from .analysis.suite import check_many
+
+        done = iter(check_many(targets, quick=quick, jobs=jobs or _default_jobs(),
+                               progress=silent if as_json else _bar()))
     for m in targets:
         try:
-            rep = run_check(m, quick=quick, progress=silent if as_json else _bar())
+            rep = run_check(m, quick=quick, progress=silent if as_json else _bar()) if done is None else next(done)
+            if isinstance(rep, Exception):
+                raise rep
         except Exception as e:   # noqa: BLE001  one model's failure is reported, the others still run
             if not all_models:
                 raise
@@ -334,6 +342,12 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
                        f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
                        f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
     sys.exit(0 if all(verdicts) else 1)
+
+
+def _default_jobs() -> int:
+    from .analysis.materials import default_jobs
+
+    return default_jobs()
 
 
 def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_json, other):
