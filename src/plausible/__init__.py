@@ -15,7 +15,7 @@ from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_
 from .backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
-from .library import material, materials
+from .catalogue import material, materials
 from .models.sum import Sum
 from .registry import info, make, names, register
 from .vec import angles, direction

@@ -355,7 +355,7 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
     import json
 
     from .analysis import materials as M
-    from .library import fit_set, materials, suggest
+    from .catalogue import fit_set, materials, suggest
 
     if not all_materials:
         _fail("--fit, --material, --out and --jobs go with --materials")
@@ -460,6 +460,8 @@ def _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, other):
     if len(given) > 1 or other:
         _fail(f"give one of MODEL, --all, --mitsuba, --mitsuba-xml, --python (got {', '.join(given)}"
               f"{' and a MODEL or --all' if other else ''})")
+    # the library's errors name its arguments (target, d, path, id); the flags are ours
+    flag = given[0]
     try:
         if mitsuba_dict:
             from .analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict
@@ -468,6 +470,8 @@ def _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, other):
                 d = json.loads(mitsuba_dict)
             except json.JSONDecodeError as e:
                 _fail(f"--mitsuba must be a JSON object, e.g. '{{\"type\": \"diffuse\"}}': {e}")
+            if not isinstance(d, dict) or "type" not in d:
+                _fail(f"--mitsuba must be a JSON object with a 'type', as mi.load_dict takes it; got {d!r}")
             return MitsubaBSDF(load_bsdf_dict(d), params={k: v for k, v in d.items() if k != "type"},
                                name=d["type"])
         if mitsuba_xml:
@@ -476,7 +480,8 @@ def _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, other):
             return as_bxdf(load_bsdf_xml(mitsuba_xml, bsdf_id))
         return as_bxdf(load_python(python_obj))
     except (ValueError, TypeError, RuntimeError) as e:
-        _fail(str(e))
+        hint = " (--id NAME chooses one)" if mitsuba_xml and not bsdf_id and "no id was given" in str(e) else ""
+        _fail(f"{flag}: {e}{hint}")
 
 
 def _print_report(rep):
@@ -717,7 +722,7 @@ def explore(port, host, no_browser):
     try:
         sock = bind(host, port)         # before the URL is announced: a busy port fails here
     except ValueError as e:
-        _fail(str(e))
+        _fail(f"{e} with --port")
     console.print(f"plausible explorer on http://{host}:{port}/ (Ctrl-C to stop)", soft_wrap=True)
     try:
         serve(host=host, port=port, open_browser=not no_browser, sock=sock)
@@ -815,7 +820,7 @@ def materials(fit, fits_only, as_json):
     fit sets, then every material with its fits.  Use one as material:NAME@FIT.
     A fit set that cannot be loaded is marked in the first table and left out
     of the materials' lists."""
-    from . import library
+    from . import catalogue as library
 
     try:
         sets = [library.fit_set(fit)] if fit else library.fits()

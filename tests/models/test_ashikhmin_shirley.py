@@ -20,7 +20,7 @@ from reference import hooks_agree
 from scipy import integrate, optimize, special, stats
 
 from plausible import registry, warps
-from plausible.bxdf import as_directions
+from plausible.directions import as_directions
 from plausible.models.ashikhmin_shirley import (
     AshikhminShirley,
     AshikhminShirleyDiffuse,

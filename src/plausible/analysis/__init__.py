@@ -7,7 +7,7 @@ callables to that contract.
 """
 
 from .adapters import CallableBxDF, as_bxdf
-from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, albedos, direction, hemispherical_albedo,
+from ..integrals.albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, albedos, direction, hemispherical_albedo,
                      is_isotropic, pdf_integral, pdf_integrals)
 from .checks import PropertyResult, energy, reciprocity, sampling_consistency
 from .chi2 import AdaptiveBinning, Chi2Result, FixedBinning, chi2, sidak

@@ -16,7 +16,7 @@ stage 3 and :func:`_statistic` stage 4.
    ``N (1 - int pdf)`` times.
 2. **Expected counts.**  The pdf is integrated over each cell with Gauss-Legendre
    panels whose breakpoints are the cell edges *and* the graded breakpoints of
-   :mod:`plausible.analysis.quadrature` (refined toward the lobe), so the
+   :mod:`plausible.integrals.quadrature` (refined toward the lobe), so the
    integral is accurate for exponents of 10^4 at grazing incidence, where a
    fixed grid with a trapezoid or midpoint rule is not (``method="fixed"``
    reproduces that naive test, for comparison).
@@ -35,8 +35,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..text import jsonable
-from .albedo import pdf_phi_sums_many
-from .quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
+from ..integrals.albedo import pdf_phi_sums_many
+from ..integrals.quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
 
 __all__ = ["AdaptiveBinning", "BINNINGS", "Cells", "Chi2Result", "FixedBinning", "chi2", "sidak"]
 

@@ -233,17 +233,34 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         return name_of(base) + (f".{comp}" if comp else "")
 
     em = Emitter(prefix, glsl_name, tables)
-    wi, wo = symbolic.direction("wi"), symbolic.direction("wo")
     chans = [1] if model.channels is None else [model.channels]
     if chans[0] not in (1, 3):
         raise ValueError(f"{model.name}: GLSL export supports grey or RGB colours, the model has "
                          f"{chans[0]} channels")
+    do_sampling = sampling and _has_sampling(model)
+    funcs, roots = _functions(model, em, prefix, p, q, do_sampling)
+    # a parameter the traced functions never read (eta and k without fresnel='conductor')
+    # is no uniform: a slider that does nothing would mislead
+    read = {v.partition(".")[0] for r in roots if isinstance(r, symbolic.Expr) for v in r.deps}
+    specs = [s for s in specs if s.name in read]
+    values = _uniforms(model, specs, name_of, split)
+    uni = {s.name for s in specs}
+    baked = {k: fmt(v, other=repr) for k, v in model.params.items() if k not in uni}
+    return GLSLShader(model=repr(model), prefix=prefix, uniforms=values, tables=em.table_declarations(),
+                      helpers=helpers(em.used), functions="\n".join(funcs),
+                      sampling=do_sampling, baked=baked, helper_names=frozenset(em.used),
+                      textures=em.textures())
+
+
+def _functions(model, em, prefix, p, q, sampling):
+    """``(GLSL functions, traced roots)``: ``<prefix>_f`` and, with ``sampling``,
+    ``<prefix>_pdf``, ``<prefix>_sample_direction`` and the sample front end."""
+    wi, wo = symbolic.direction("wi"), symbolic.direction("wo")
     f = channels3(_trace(model, model._f, wi, wo, p))
     roots = list(f)
     # wi, wo are unit vectors (the contract's front end normalises; a shader's caller does)
     funcs = [em.function(f"{P} vec3 {prefix}_f({P} vec3 wi, {P} vec3 wo)", f, "vec3({0}, {1}, {2})")]
-    do_sampling = sampling and _has_sampling(model)
-    if do_sampling:
+    if sampling:
         pdf = _trace(model, model._pdf, wi, wo, q)
         roots.append(pdf)
         funcs.append(em.function(f"{P} float {prefix}_pdf({P} vec3 wi, {P} vec3 wo)", [pdf], "{0}"))
@@ -252,10 +269,12 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
         funcs.append(em.function(f"{P} vec3 {prefix}_sample_direction({P} vec3 wi, {P} vec3 u)", list(wo_s),
                                  "vec3({0}, {1}, {2})"))
         funcs.append(_sample_front_end(prefix))
-    # a parameter the traced functions never read (eta and k without fresnel='conductor')
-    # is no uniform: a slider that does nothing would mislead
-    read = {v.partition(".")[0] for r in roots if isinstance(r, symbolic.Expr) for v in r.deps}
-    specs = [s for s in specs if s.name in read]
+    return funcs, roots
+
+
+def _uniforms(model, specs, name_of, split) -> list:
+    """A :class:`Uniform` per parameter of ``specs`` with the model's value
+    (a colour of ``split`` as three ``float`` uniforms ``_r``, ``_g``, ``_b``)."""
     values = []
     for s in specs:
         v = model.params[s.name]
@@ -266,12 +285,7 @@ def to_glsl(model, uniforms=False, *, prefix: str = "plausible", sampling: bool 
             values.append(Uniform(name_of(s.name), "vec3", tuple(float(x) for x in np.broadcast_to(v, 3)), s))
         else:
             values.append(Uniform(name_of(s.name), "float", (float(v),), s))
-    uni = {s.name for s in specs}
-    baked = {k: fmt(v, other=repr) for k, v in model.params.items() if k not in uni}
-    return GLSLShader(model=repr(model), prefix=prefix, uniforms=values, tables=em.table_declarations(),
-                      helpers=helpers(em.used), functions="\n".join(funcs),
-                      sampling=do_sampling, baked=baked, helper_names=frozenset(em.used),
-                      textures=em.textures())
+    return values
 
 
 def _sample_front_end(prefix: str) -> str:

@@ -30,7 +30,7 @@ from rich.markup import escape
 
 from ..progress import start
 from ..text import fmt
-from . import FIGURES, Context, get, names
+from .core import FIGURES, Context, get, names
 
 _PKG = Path(__file__).resolve().parent.parent
 

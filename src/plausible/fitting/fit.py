@@ -34,7 +34,7 @@ specifications with their ranges); the albedo comes from
    parameters along it are listed in ``FitResult.unconstrained`` and a
    :class:`UnconstrainedWarning` names them.
 6. **Albedo** inside the optimiser: a fixed graded Gauss-Legendre rule per
-   incidence angle (:func:`plausible.analysis.quadrature.hemisphere_grid`,
+   incidence angle (:func:`plausible.integrals.quadrature.hemisphere_grid`,
    ``m = 4``, ``levels = 8``; measured against the accurate integrator: 5e-7
    relative for an exponent of 30, 2e-4 for Cook-Torrance ``m = 0.2``, 6e-3 for
    exponents of 10^4, 9e-2 for Ward ``alpha = 0.01``); every **reported** albedo error uses the accurate integrator
@@ -173,7 +173,7 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
     """
     if isinstance(target, Target):
         return target
-    if isinstance(target, str) and target.strip().startswith("material:"):   # a published fit
+    if isinstance(target, str) and registry.is_spec(target):   # e.g. a published fit, material:NAME@FIT
         return as_target(registry.make_from_spec(target.strip()), thetas_deg=thetas_deg)
     if isinstance(target, (str, Path)):
         p = Path(target)
@@ -186,7 +186,7 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
         if not p.exists() and (p.suffix.lower() in (".csv", ".binary", ".txt") or "/" in str(target)):
             raise ValueError(f"target file {str(target)!r} not found")
         if p.exists():
-            from .merl import is_merl_file, read_merl
+            from ..models.merl import is_merl_file, read_merl
 
             if is_merl_file(p):
                 return as_target(read_merl(p), thetas_deg=thetas_deg)
@@ -219,7 +219,7 @@ def as_target(target, *, thetas_deg=M.THETAS_DEG, target_albedo=None) -> Target:
 
 
 def _table_target(wi, wo, f, label, target_albedo):
-    from ..bxdf import as_directions
+    from ..directions import as_directions
 
     try:
         wi, wo = as_directions("wi", wi), as_directions("wo", wo)
@@ -281,7 +281,7 @@ class _FastAlbedo:
     """Albedo by a fixed graded rule per incidence angle (smooth in the parameters)."""
 
     def __init__(self, thetas, peaks_of):
-        from ..analysis.quadrature import hemisphere_grid
+        from ..integrals.quadrature import hemisphere_grid
 
         self.grids = []
         for t in thetas:
@@ -493,7 +493,7 @@ class _Values:
 
     def __init__(self, tgt: Target, fast: _FastAlbedo | None):
         from .. import backend
-        from ..bxdf import as_directions
+        from ..directions import as_directions
 
         self.tgt, self.fast = tgt, fast
         wi = np.broadcast_to(as_directions("wi", tgt.wi), np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo)))

@@ -1,7 +1,7 @@
 """Directional and hemispherical albedo.
 
 The directional albedo ``a(wi) = int f(wi, wo) cos(theta_o) d omega_o`` is
-computed by deterministic quadrature (:mod:`plausible.analysis.quadrature`) in
+computed by deterministic quadrature (:mod:`plausible.integrals.quadrature`) in
 the half-vector frame (:func:`~.quadrature.half_vector_breaks`: the mirror
 direction is an edge of the domain at every incidence, the horizon another): a
 tensor Gauss-Legendre rule on panels graded toward the lobe, evaluated at two
@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import backend as _backend
-from ..bxdf import BxDF, as_directions
+from ..bxdf import BxDF
+from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
 from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
