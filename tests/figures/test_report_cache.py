@@ -133,7 +133,7 @@ def test_parallel_run_makes_the_same_report_as_one_process(tmp_path):
         assert files
         for f in files:
             x, y = _numbers(f.read_text()), _numbers((tmp_path / "two" / n / f.name).read_text())
-            assert x.shape == y.shape and np.allclose(x, y, rtol=1e-7, atol=1e-15), f   # written as %.8g
+            assert x.shape == y.shape and np.allclose(x, y, rtol=1e-7, atol=1e-12), f   # %.8g; error bounds of 1e-11 are rounding
         assert c.counts[n][1] == c.counts[n][0] > 0    # the workers' progress reached the parent
     strip = lambda p: re.sub(r"made in [0-9.]+ s", "", p.read_text())   # noqa: E731
     assert strip(tmp_path / "two" / "index.html") == strip(tmp_path / "one" / "index.html")

@@ -207,7 +207,7 @@ def _bisect(b):
 def _bands_expected(model, wi, bands, m):
     """Integral of the pdf over each cell ``[tbr[0], tbr[-1]] x [p_edges[j], p_edges[j+1]]``
     of every band ``(ta, tb, p_edges, tbr, pbr)`` (all bands in one
-    :func:`~plausible.analysis.albedo.pdf_phi_sums_many` call)."""
+    :func:`~plausible.integrals.albedo.pdf_phi_sums_many` call)."""
     rules = [(panel_rule(tbr, m), panel_rule(pbr, m)) for _, _, _, tbr, pbr in bands]
     sums = pdf_phi_sums_many(model, wi, [(tn, tw * np.sin(tn), pn) for (tn, tw), (pn, _) in rules])
     out = []
