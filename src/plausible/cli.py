@@ -128,10 +128,12 @@ class _Group(click.Group):
 @click.version_option(package_name="plausible")
 @click.pass_context
 def main(ctx):
-    """Physically plausible reflection models of the Phong family.
+    """Physically plausible BRDFs: evaluate, sample, check, fit, export and render.
 
-    Evaluate, sample, verify and plot the models of Ashikhmin & Shirley (2000),
-    Neumann, Neumann & Szirmay-Kalos (1999) and Lafortune & Willems (1994).
+    The Phong family (Ashikhmin & Shirley, Modified Phong, reciprocal Phong and
+    Blinn, albedo pumping-up), Lafortune, Schlick, Ward, Cook-Torrance, He-Torrance,
+    Low and more; the published MERL fits (material:NAME@FIT); any Mitsuba BSDF or
+    Python callable through the same checks.
     """
     import os
 
