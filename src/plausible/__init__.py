@@ -1,8 +1,11 @@
-"""plausible: physically plausible reflection models of the Phong family.
+"""plausible: physically plausible BRDFs under one contract (:mod:`plausible.bxdf`).
 
-Evaluate, sample, verify, fit and render the Ashikhmin-Shirley anisotropic
-Phong BRDF, the Modified Phong BRDF, the reciprocal Phong/Blinn models and
-albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
+Evaluate, sample, check (reciprocity, energy, sampling, chi-square), fit,
+export (GLSL, BRDF Explorer, glTF) and render (Mitsuba 3 plugins) every
+registered model -- the Phong family, Lafortune, Schlick, Ward, Cook-Torrance,
+He-Torrance, Low, albedo pumping-up, ... (:func:`names`) -- the published MERL
+fits (:func:`material`), and foreign BSDFs through adapters.  The package's
+floors are drawn in ``docs/index.md`` ("Structure").
 
 >>> import plausible
 >>> m = plausible.make("modified-phong", kd=0.5, ks=0.5, n=10)

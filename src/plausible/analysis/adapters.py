@@ -43,7 +43,8 @@ import sys
 
 import numpy as np
 
-from ..bxdf import CHUNK, Sample, _as_unit_interval, as_directions
+from ..bxdf import Sample
+from ..directions import CHUNK, as_directions, as_unit_interval
 from ..vec import HORIZON
 
 __all__ = ["CallableBxDF", "as_bxdf", "load_python", "tolerances"]
@@ -241,7 +242,7 @@ class CallableBxDF:
         if self._sample is None or self._pdf is None:
             raise NotImplementedError(f"{self.name}: {self.not_applicable['sampling']}")
         wi = as_directions("wi", wi)
-        u = _as_unit_interval(u)
+        u = as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         a = np.ascontiguousarray(np.broadcast_to(wi, shape + (3,)).reshape(-1, 3))
         uu = np.ascontiguousarray(np.broadcast_to(u, shape + (3,)).reshape(-1, 3))

@@ -56,7 +56,8 @@ import math
 
 import numpy as np
 
-from ..bxdf import CHUNK, Sample, _as_array, _as_unit_interval, _check_directions
+from ..bxdf import Sample
+from ..directions import CHUNK, as_array, as_unit_interval, check_directions
 from ..mitsuba import VARIANTS, ensure_variant
 from ..vec import HORIZON
 
@@ -267,7 +268,7 @@ class MitsubaBSDF:
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
         wi = _as_float32_directions("wi", wi)
-        u = _as_unit_interval(u)
+        u = as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         a = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
         uu = np.minimum(np.broadcast_to(u, shape + (3,)).reshape(-1, 3), 1 - 2.0 ** -24).astype(np.float32)
@@ -392,11 +393,11 @@ def _unit32(w, nrm):
 
 
 def _as_float32_directions(name, w):
-    """Validated directions (as :func:`plausible.bxdf.as_directions`), normalised only
+    """Validated directions (as :func:`plausible.directions.as_directions`), normalised only
     where they are not unit vectors to float32 precision: a direction the adapter
     returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
-    a = _as_array(name, w)
-    _check_directions(name, a)
+    a = as_array(name, w)
+    check_directions(name, a)
     return _unit32(a, np.sqrt(np.sum(a * a, axis=-1)))
 
 

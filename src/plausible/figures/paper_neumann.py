@@ -673,7 +673,7 @@ def perceptual_checks(least_squares: dict, perceptual: dict) -> list:
         "corresponds to the logarithmic characteristics of the human vision system.\u201d",
         model="neumann-metal", reference="cook-torrance:m=0.2:rs=0.9", thetas_deg=(0.0, 30.0, 60.0, 80.0))
 def perceptual(ctx, model, reference, thetas_deg):
-    from plausible.fitting.fit import as_target, fit
+    from plausible.fitting import as_target, fit
 
     ref = plausible.registry.make_from_spec(reference)
     if ctx.quick:
