@@ -178,16 +178,14 @@ def read_sources(source) -> list[Source]:
         if suffix == ".xml":
             return _xml_sources(text)
         return _json_sources(text)
-    if text.startswith("material:"):
-        m = registry.make_from_spec(text)
-        return [Source(text.split(":", 1)[1].split("@", 1)[0], m, text)]
     if " + " in text:
         from ..models.sum import Sum
 
         parts = [registry.make_from_spec(s.strip()) for s in text.split(" + ")]
         return [Source("sum", Sum(parts, name="sum"), " + ".join(s.strip() for s in text.split(" + ")))]
     m = registry.make_from_spec(text)
-    return [Source(m.name, m, registry.spec_of(m))]
+    spec = registry.spec_of(m)
+    return [Source(getattr(m, "label", None) or m.name, m, text if spec == repr(m) else spec)]
 
 
 def _mitsuba_source(name, d, bsdf=None):
@@ -359,8 +357,8 @@ def _albedo_warnings(alb):
 
 
 def _to_model(src, name, metric, starts, src_alb, warn):
-    from .. import fit
     from ..analysis import albedo_curve
+    from ..fitting import fit
     from ..fitting.fit import UnconstrainedWarning
 
     with warnings.catch_warnings(record=True) as caught:
