@@ -11,10 +11,13 @@ JOBS     ?= 2
 # examples/three/index.html's import map.
 THREE_VERSION := 0.187.0
 THREE_DIR     := .cache/npm/node_modules/three
+# The Khronos glTF validator for the glTF export's tests (tests/export/test_gltf.py).
+GLTF_VALIDATOR_VERSION := 2.0.0-dev.3.10
+GLTF_VALIDATOR_DIR     := .cache/npm/node_modules/gltf-validator
 
-.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium glslang three clean
+.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium glslang three gltf-validator clean
 
-setup: $(STAMP) llvm chromium glslang three
+setup: $(STAMP) llvm chromium glslang three gltf-validator
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -52,6 +55,13 @@ three:
 	    else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm >/dev/null; fi; \
 	  fi; \
 	  mkdir -p .cache/npm && npm install --silent --no-audit --no-fund --prefix .cache/npm three@$(THREE_VERSION); \
+	fi
+
+# The Khronos glTF validator from the npm registry, pinned, into .cache/npm beside three.js
+# (npm records both in .cache/npm/package.json, so neither install removes the other).
+gltf-validator: three
+	@if ! grep -qs '"version": "$(GLTF_VALIDATOR_VERSION)"' $(GLTF_VALIDATOR_DIR)/package.json; then \
+	  npm install --silent --no-audit --no-fund --prefix .cache/npm gltf-validator@$(GLTF_VALIDATOR_VERSION); \
 	fi
 
 # The main job: every figure of the papers, measured, as a browsable report -> $(OUT)/index.html.

@@ -63,13 +63,13 @@ def test_check_full(benchmark):
 def test_pumped_up_table_2d(benchmark, monkeypatch):
     """The 2-D albedo table (theta x 32 azimuths) of an anisotropic base, built
     from scratch (no disk cache, no memory cache)."""
-    from plausible.models import pumped_up
+    from plausible.integrals import cache
 
     monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", "")
     base = "ashikhmin-shirley-specular:nu=10:nv=200:rs=1"
 
     def run():
-        pumped_up._TABLES.clear()
+        cache._TABLES.clear()
         return plausible.make("pumped-up", base=base).tables[0]
 
     tab = run()

@@ -165,7 +165,7 @@ def test_albedo_json_holds_the_curve():
 
 
 def test_materials_json_and_unloadable_fits_left_out(monkeypatch):
-    from plausible import library
+    from plausible.catalogue import fit_sets as library
 
     d = json.loads(run("materials", "--json").output)
     assert {f["key"] for f in d["fits"]} == {f.key for f in library.fits()}
@@ -195,7 +195,7 @@ def test_tables_in_a_pipe_are_not_cut():
     env.pop("COLUMNS", None)
     out = subprocess.run([sys.executable, "-m", "plausible.cli", "materials", "--fits"], capture_output=True,
                          text=True, env=env, check=True).stdout
-    for fs in plausible.library.fits():
+    for fs in plausible.catalogue.fits():
         assert fs.key in out                     # the keys users copy, whole
     assert "ngan2005/ashikhmin…" not in out
 

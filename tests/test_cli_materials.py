@@ -7,7 +7,7 @@ import pytest
 from click.testing import CliRunner
 
 import plausible
-from plausible.analysis.albedo import direction
+from plausible.integrals.albedo import direction
 from plausible.cli import main
 
 

@@ -16,7 +16,7 @@ import pytest
 
 import plausible
 from fuzzing import cases, direction_pairs, incidences, uniforms, weight_bound
-from plausible.bxdf import HORIZON
+from plausible.vec import HORIZON
 
 
 def fuzz(m, rng, n_pairs: int, n_samples: int):

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible import library, registry
-from plausible.library import FIT_SETS, Term, parse_line
+from plausible import registry
+from plausible.catalogue import fit_sets as library
+from plausible.catalogue.fit_sets import FIT_SETS, Term, parse_line
 
 
 def test_parsed_parameters_match_the_published_file():
@@ -77,7 +78,7 @@ def test_every_shipped_fit_set_is_built():
 
 def test_fits_of_models_not_built_are_refused_with_the_reason(monkeypatch):
     """Every shipped set loads (issue 26); a set without its model is refused with its reason."""
-    from plausible import library
+    from plausible.catalogue import fit_sets as library
 
     fake = library.FitSet("test/unbuilt", "ngan_ward.fit", "NganWard", "test", "test",
                           "the model is not implemented in plausible (test)")

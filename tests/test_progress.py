@@ -22,6 +22,7 @@ from click.testing import CliRunner
 from rich.console import Console
 
 import plausible
+import plausible.integrals.cache
 import plausible.models.pumped_up as pu
 from plausible import cli, make, registry
 from plausible.analysis import albedo_curve, albedo_table, check
@@ -70,7 +71,7 @@ class TestProtocol:
 
     def test_pumped_up_reports_the_tables_it_builds(self, tmp_path, monkeypatch):
         monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", str(tmp_path))
-        monkeypatch.setattr(pu, "_TABLES", {})
+        monkeypatch.setattr(plausible.integrals.cache, "_TABLES", {})
         c = Counter()
         with reporting(c):      # as the command line does: reaches a model built from a spec
             registry.make_from_spec("pumped-up:base=[lambertian:rd=0.7]")
@@ -78,6 +79,14 @@ class TestProtocol:
         c2 = Counter()
         pu.PumpedUp(base="lambertian:rd=0.7", progress=c2)   # cached now: nothing to report
         assert c2.counts == {}
+
+    def test_pumped_up_given_a_counter_completes_every_task_it_announces(self, tmp_path, monkeypatch):
+        """Its horizon probe took the factory for a tick: it announced a task of 1 step that never ticked."""
+        monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", str(tmp_path))
+        monkeypatch.setattr(plausible.integrals.cache, "_TABLES", {})
+        c = Counter()
+        pu.PumpedUp(base="lambertian:rd=0.6", progress=c)
+        assert c.counts and _complete(c.counts), c.counts
 
     def test_the_ambient_reporter_ends_with_its_block(self):
         c = Counter()

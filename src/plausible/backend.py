@@ -57,7 +57,7 @@ CHOICES = ("auto", "numpy", "drjit")
 #: 10x faster from 65,000; a kernel not seen before (a new model or parameter
 #: set) costs 30-100 ms to compile once, which NumPy repays only at about 30,000.
 AUTO_MIN_ROWS = 1 << 15
-#: The same for quadrature (:mod:`plausible.analysis.albedo`): its kernel does
+#: The same for quadrature (:mod:`plausible.integrals.albedo`): its kernel does
 #: not depend on the grid or the incidence, so it is compiled once per model.
 AUTO_MIN_NODES = 1 << 14
 #: The thresholds above hold once a model structure (:func:`kernel_key`) has run
@@ -463,7 +463,7 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
     alone, ``(A, n_phi)``.
 
     With ``tmax`` (an array shaped like ``phi``) the rule is in the half-vector frame
-    of :func:`plausible.analysis.quadrature.half_vector_breaks`: ``theta`` holds
+    of :func:`plausible.integrals.quadrature.half_vector_breaks`: ``theta`` holds
     ``s``, the half vector is at polar angle ``t = s tmax`` and azimuth ``phi``,
     ``wo = 2 (wi.h) h - wi``, and each node's weight is multiplied by
     ``tmax sin(t) 4 (wi.h)`` (``theta_w`` then holds no ``sin``); with ``tmin`` too (shaped

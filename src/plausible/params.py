@@ -41,6 +41,10 @@ class Param:
         hi = "inf" if self.hi == math.inf else f"{self.hi:g}"
         return f"[{lo}, {hi}]"
 
+    def options(self) -> list:
+        """The values a choice may take, for menus (:attr:`choices`)."""
+        return list(self.choices)
+
     def validate(self, value, owner: str = "model", channels: tuple = None):
         """Return the value converted (float, or float64 array for colours).
 
@@ -102,6 +106,9 @@ class ModelInfo:
     reciprocal: bool = True
     energy_conserving: bool = True
     references: tuple = field(default_factory=tuple)
+    #: An entry of a catalogue of data (published materials), not a model family:
+    #: not in :func:`plausible.names`, known to :func:`plausible.info` and ``make``.
+    catalogue: bool = False
 
     def param(self, name: str) -> Param:
         for p in self.params:
@@ -150,6 +157,23 @@ def _parenthesised(text: str) -> list:
 def format_groups(value) -> str:
     """Inverse of :func:`parse_groups` (a list of number tuples -> string)."""
     return "; ".join(" ".join(repr(float(x)) for x in g) for g in value)
+
+
+def spec_value(v) -> str:
+    """A parameter value as spec text that :func:`parse_value` reads back: floats
+    exactly (``repr``), colours as ``r,g,b``, groups of tuples as ``a,b;c,d;``, a
+    nested model as its own spec in square brackets."""
+    if hasattr(v, "spec") and hasattr(v, "eval"):      # a nested model
+        return f"[{v.spec()}]"
+    if hasattr(v, "tolist"):
+        v = v.tolist()
+    if isinstance(v, (list, tuple)):
+        if any(isinstance(x, (list, tuple)) or hasattr(x, "tolist") for x in v):
+            return "".join(spec_value(x) + ";" for x in v)
+        return ",".join(spec_value(x) for x in v)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return str(v)
+    return repr(float(v)) if isinstance(v, float) else str(v)
 
 
 def parse_value(text: str):

@@ -12,11 +12,14 @@ _LOADED = False
 
 
 def register(name: str, description: str, *, reciprocal: bool = True,
-             energy_conserving: bool = True, references: tuple = ()):
+             energy_conserving: bool = True, references: tuple = (), catalogue: bool = False):
     """Class decorator: add a :class:`~plausible.bxdf.BxDF` subclass to the registry.
 
     ``reciprocal`` / ``energy_conserving`` state what the model *claims*; the
     registry-wide tests assert that :func:`plausible.check` agrees.
+    ``catalogue``: an entry of a catalogue of data (``material``), which
+    :func:`names` leaves out unless asked.  A class may read its own spec items
+    (a classmethod ``from_spec_items(items, **params)``, see :func:`make_from_spec`).
     """
 
     def deco(cls):
@@ -24,7 +27,7 @@ def register(name: str, description: str, *, reciprocal: bool = True,
             raise ValueError(f"model name {name!r} registered twice")
         info = ModelInfo(name=name, cls=cls, params=tuple(cls.PARAMS), description=description,
                          reciprocal=reciprocal, energy_conserving=energy_conserving,
-                         references=tuple(references))
+                         references=tuple(references), catalogue=catalogue)
         cls.info = info
         _REGISTRY[name] = info
         return cls
@@ -32,21 +35,27 @@ def register(name: str, description: str, *, reciprocal: bool = True,
     return deco
 
 
+#: The packages whose modules register entries, imported by name on first use
+#: (they import this module to register: the registry imports none of them).
+ENTRY_PACKAGES = ("models", "catalogue")
+
+
 def _load():
     global _LOADED
     if _LOADED:
         return
-    from . import models
-
-    for mod in pkgutil.iter_modules(models.__path__):
-        importlib.import_module(f"{models.__name__}.{mod.name}")
+    for name in ENTRY_PACKAGES:
+        pkg = importlib.import_module(f"{__package__}.{name}")
+        for mod in pkgutil.iter_modules(pkg.__path__):
+            importlib.import_module(f"{pkg.__name__}.{mod.name}")
     _LOADED = True
 
 
-def names() -> list[str]:
+def names(catalogue: bool = False) -> list[str]:
     """Names of every registered model: plausible's own by module (alphabetical)
     and in the order each module defines them, then any others in registration
-    order -- the same list whichever module happened to be imported first."""
+    order -- the same list whichever module happened to be imported first.
+    ``catalogue``: the catalogue entries (``material``) too, last."""
     _load()
     seq = {n: i for i, n in enumerate(_REGISTRY)}
 
@@ -55,7 +64,8 @@ def names() -> list[str]:
         own = mod.startswith("plausible.models.")
         return (not own, mod if own else "", seq[n])
 
-    return sorted(_REGISTRY, key=key)
+    own = sorted((n for n in _REGISTRY if not _REGISTRY[n].catalogue), key=key)
+    return own + sorted((n for n in _REGISTRY if _REGISTRY[n].catalogue), key=key) if catalogue else own
 
 
 def info(name: str) -> ModelInfo:
@@ -72,7 +82,7 @@ def info(name: str) -> ModelInfo:
                          f"{', '.join(sorted(_REGISTRY))}") from None
 
 
-def make(name: str, **params):
+def make(name: str, /, **params):
     """Build the registered model ``name`` with ``params`` (defaults for the rest).
     ``name`` may be a spec, ``"ashikhmin-shirley:nu=10"`` or ``"material:NAME@FIT"``
     (:func:`make_from_spec`; ``params`` then add to or override the spec's)."""
@@ -139,45 +149,38 @@ def split_spec(spec: str) -> list[str]:
 
 def spec_of(model) -> str:
     """The spec string of a model, ``"name:k=v:..."``, that :func:`make_from_spec`
-    reads back into an equal model: floats exactly (``repr``), colours as
-    ``r,g,b``, groups of tuples as ``a,b;c,d;``, a nested model in square
-    brackets.  A model outside the registry gives its ``repr``.
+    reads back into an equal model (:meth:`plausible.bxdf.BxDF.spec`); anything
+    else gives its ``repr``.
 
     >>> spec_of(make("pumped-up"))
     'pumped-up:base=[reciprocal-phong:ks=1.0:n=20.0]:correction=max:times=1:fresnel=none:rs=1.0:eta=0.2:k=3.0'
     """
-    inf = getattr(model, "info", None)
-    if inf is None or _REGISTRY.get(inf.name) is not inf:
-        return repr(model)
-    return ":".join([inf.name] + [f"{k}={_spec_value(v)}" for k, v in model.params.items()])
+    spec = getattr(model, "spec", None)
+    return spec() if callable(spec) else repr(model)
 
 
-def _spec_value(v) -> str:
-    if hasattr(v, "params") and hasattr(v, "eval"):      # a nested model
-        return f"[{spec_of(v)}]"
-    if hasattr(v, "tolist"):
-        v = v.tolist()
-    if isinstance(v, (list, tuple)):
-        if any(isinstance(x, (list, tuple)) or hasattr(x, "tolist") for x in v):
-            return "".join(_spec_value(x) + ";" for x in v)
-        return ",".join(_spec_value(x) for x in v)
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return str(v)
-    return repr(float(v)) if isinstance(v, float) else str(v)
+def is_spec(text: str) -> bool:
+    """Whether ``text`` reads as the spec of a registered entry that takes its own
+    spec items (``material:NAME@FIT``, whose fit key holds a '/', is not a path)."""
+    try:
+        name = split_spec(text.strip())[0].strip() if ":" in text else ""
+    except ValueError:              # unbalanced brackets: not a spec
+        return False
+    _load()
+    return hasattr(getattr(_REGISTRY.get(name), "cls", None), "from_spec_items")
 
 
 def make_from_spec(spec: str, **extra):
     """Build a model from ``"name"`` or ``"name:k=v:k=v"`` (colours as ``r,g,b``;
-    a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``;
-    a published fit of a real material, ``"material:NAME@FIT"``, see :mod:`plausible.library`)."""
-    if spec.strip().startswith("material:"):
-        from .library import from_spec  # the library imports the models, which import us
-
-        if extra:
-            raise ValueError(f"model spec {spec!r}: a material takes no parameters "
-                             f"(got {', '.join(sorted(extra))})")
-        return from_spec(spec.strip())
+    a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``).
+    An entry whose class reads its own spec items (``from_spec_items``) gets them:
+    a published fit of a real material, ``"material:NAME@FIT"``
+    (:class:`plausible.catalogue.entry.Material`)."""
     name, *assign = split_spec(spec)
+    _load()
+    reader = getattr(getattr(_REGISTRY.get(name.strip()), "cls", None), "from_spec_items", None)
+    if reader is not None:
+        return reader([a.strip() for a in assign], **extra)
     params = parse_assignments(assign)
     params.update(extra)
     try:

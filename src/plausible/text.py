@@ -41,7 +41,7 @@ def fmt(v, spec: str = "g", *, sep: str = ", ", brackets: bool = True, other=str
 def jsonable(x):
     """``x`` with NumPy arrays and scalars turned into lists and Python numbers,
     recursively through dicts, lists and tuples; non-finite floats as strings; a
-    model (e.g. pumped-up's base) as its spec string (:func:`plausible.registry.spec_of`)."""
+    model (e.g. pumped-up's base) as its spec string (:meth:`plausible.bxdf.BxDF.spec`)."""
     if isinstance(x, dict):
         return {k: jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
@@ -55,10 +55,8 @@ def jsonable(x):
         return int(x)
     if isinstance(x, np.bool_):
         return bool(x)
-    if hasattr(x, "params") and hasattr(x, "eval"):     # a nested model (pumped-up's base)
-        from .registry import spec_of       # import here: registry sits above this module
-
-        return spec_of(x)
+    if hasattr(x, "spec") and hasattr(x, "eval"):       # a nested model (pumped-up's base)
+        return x.spec()
     return x
 
 

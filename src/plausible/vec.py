@@ -9,6 +9,16 @@ from __future__ import annotations
 
 import math
 
+#: Directions with ``cos(theta) <= HORIZON`` count as on the horizon (f = 0).
+#: Models that divide by ``cos(theta)`` (original Phong/Blinn, Ward, Cook-Torrance
+#: with G = 1) would otherwise overflow for denormal cosines.
+HORIZON = 1e-12
+
+
+def above(ops, wi, wo):
+    """Both directions above the horizon (``cos(theta) > HORIZON``)."""
+    return (wi[2] > HORIZON) & (wo[2] > HORIZON)
+
 
 def dot(a, b):
     """Scalar product ``a . b``."""

@@ -8,7 +8,7 @@ the same code runs on NumPy and on Dr.Jit.
 from __future__ import annotations
 
 from . import vec
-from .bxdf import HORIZON
+from .vec import HORIZON
 from .ops import INV_PI, PI
 
 
@@ -262,3 +262,66 @@ def reflected_pdf(ops, wi, wo, half_vector_pdf):
     h, kh = vec.half_vector_cos(ops, wi, wo)  # wi.h from |wi + wo| (exact at grazing)
     ok = (kh > 0) & (wo[2] > HORIZON) & (wi[2] > HORIZON)
     return ops.where(ok, half_vector_pdf(h) / (4.0 * ops.where(ok, kh, 1.0)), 0.0)
+
+
+def ggx_d(ops, h, ax, ay):
+    """The anisotropic GGX / Trowbridge-Reitz distribution of normals,
+    ``D(h) = 1 / (pi ax ay ((hx/ax)^2 + (hy/ay)^2 + hz^2)^2)`` for ``hz > 0``, else 0
+    (Walter et al., EGSR 2007, eq. 33; Heitz, JCGT 3(2), 2014, eq. 85 for the
+    anisotropic form; glTF 2.0 Appendix B and KHR_materials_anisotropy).  For
+    ``ax = ay = alpha`` it is the glTF form
+    ``alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2)``.  ``D(h) (n.h)`` integrates to
+    one over the hemisphere.  With ``ax, ay <= 1`` and ``|h| = 1`` the bracket is
+    at least 1, so ``D <= 1 / (pi ax ay)`` never overflows.
+    """
+    s = (h[0] / ax) ** 2 + (h[1] / ay) ** 2 + h[2] * h[2]
+    ok = h[2] > 0
+    s = ops.where(ok, s, 1.0)
+    return ops.where(ok, 1.0 / (PI * ax * ay * s * s), 0.0)
+
+
+def ggx_stretched_length(ops, w, ax, ay):
+    """``|(ax wx, ay wy, wz)|``: ``wz sqrt(1 + tan^2 theta (ax^2 cos^2 phi + ay^2 sin^2 phi))``,
+    so that GGX's Smith ``Lambda(w) = (|stretched w| / wz - 1) / 2`` (Heitz 2014, eq. 86)."""
+    return ops.sqrt((ax * w[0]) ** 2 + (ay * w[1]) ** 2 + w[2] * w[2])
+
+
+def ggx_visible_half_vector(ops, wi, ax, ay, u1, u2):
+    """A half vector from GGX's distribution of normals visible from ``wi``,
+    ``D_wi(h) = G1(wi) max(wi.h, 0) D(h) / wi.z`` (E. Heitz, "Sampling the GGX
+    distribution of visible normals", JCGT 7(4), 2018, listing 1): stretch ``wi`` to
+    the configuration ``ax = ay = 1``, sample the projected hemisphere (a disc whose
+    half is squeezed by ``(1 + cos)/2``), lift the point onto the hemisphere, unstretch.
+    ``wi.z`` must be positive (the caller rejects the rest)."""
+    vx, vy, vz = ax * wi[0], ay * wi[1], wi[2]
+    inv = 1.0 / ops.sqrt(vx * vx + vy * vy + vz * vz)
+    vx, vy, vz = vx * inv, vy * inv, vz * inv
+    # an orthonormal basis (t1, t2, v); t1 = (1, 0, 0) when v is the normal
+    lensq = vx * vx + vy * vy
+    pos = lensq > 0
+    il = ops.where(pos, 1.0 / ops.sqrt(ops.where(pos, lensq, 1.0)), 0.0)
+    t1 = (ops.where(pos, -vy * il, 1.0), ops.where(pos, vx * il, 0.0), 0.0 * vz)
+    t2 = (vy * t1[2] - vz * t1[1], vz * t1[0] - vx * t1[2], vx * t1[1] - vy * t1[0])
+    # a point of the unit disc, its upper half squeezed toward the v axis
+    r = ops.sqrt(u1)
+    phi = 2.0 * PI * u2
+    p1 = r * ops.cos(phi)
+    s = 0.5 * (1.0 + vz)
+    p2 = (1.0 - s) * ops.sqrt(ops.maximum(1.0 - p1 * p1, 0.0)) + s * r * ops.sin(phi)
+    p3 = ops.sqrt(ops.maximum(1.0 - p1 * p1 - p2 * p2, 0.0))
+    nx = p1 * t1[0] + p2 * t2[0] + p3 * vx
+    ny = p1 * t1[1] + p2 * t2[1] + p3 * vy
+    nz = p1 * t1[2] + p2 * t2[2] + p3 * vz
+    return vec.normalize(ops, (ax * nx, ay * ny, ops.maximum(nz, 0.0)))
+
+
+def ggx_visible_reflected_pdf(ops, wi, wo, ax, ay):
+    """Density of ``wo = reflect(wi, h)`` with ``h`` from :func:`ggx_visible_half_vector`:
+    ``D_wi(h) / (4 wi.h)`` with ``G1(wi) = 2 wi.z / (wi.z + |stretched wi|)``
+    (Heitz 2018, eq. 2 and 17), which simplifies to
+    ``D(h) / (2 (wi.z + |stretched wi|))``; zero unless ``wi.h > 0`` and both
+    directions are above the horizon."""
+    h, kh = vec.half_vector_cos(ops, wi, wo)
+    ok = (kh > 0) & (wo[2] > HORIZON) & (wi[2] > HORIZON)
+    den = 2.0 * (wi[2] + ggx_stretched_length(ops, wi, ax, ay))
+    return ops.where(ok, ggx_d(ops, h, ax, ay) / ops.where(ok, den, 1.0), 0.0)

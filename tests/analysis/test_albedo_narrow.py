@@ -52,7 +52,7 @@ def test_energy_passes_a_conserving_narrow_lobe_instead_of_failing_it():
 def _broken_quadrature(monkeypatch, value, error):
     """The energy check fed a broken integrator: every albedo ``value +- error``."""
     from plausible.analysis import checks
-    from plausible.analysis.albedo import AlbedoResult
+    from plausible.integrals.albedo import AlbedoResult
 
     monkeypatch.setattr(checks, "albedos", lambda model, wis, **kw: [AlbedoResult(value, error)] * len(wis))
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible.analysis.albedo import direction
+from plausible.integrals.albedo import direction
 from plausible.analysis.materials import check_fit, check_model, markdown, summary
 from plausible.models.sum import Sum
 

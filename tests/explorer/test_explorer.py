@@ -73,7 +73,7 @@ def test_energy_gain_is_marked(client):
 
 def test_slice_is_f_at_the_half_diff_angles(client):
     d = client.post("/api/slice", json={"model": "blinn"}).json()
-    from plausible.fitting.merl import from_half_diff
+    from plausible.models.merl import from_half_diff
 
     wi, wo = from_half_diff(math.radians(d["theta_h"][5]), math.radians(d["theta_d"][20]), math.pi / 2)
     assert d["f"][5][20] == pytest.approx(float(plausible.make("blinn").eval(wi, wo)), rel=1e-12)

@@ -9,7 +9,7 @@ import pytest
 import plausible
 from plausible import symbolic
 from plausible.analysis.suite import variants
-from plausible.export import _symbolic_params, uniform_params
+from plausible.export.shader import _symbolic_params, uniform_params
 from plausible.models.lambert import Lambertian
 from plausible.models.phong import ModifiedPhong
 from plausible.symbolic import SYM, SymbolicBranchError

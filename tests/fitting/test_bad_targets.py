@@ -12,7 +12,7 @@ from click.testing import CliRunner
 import plausible
 from plausible.cli import main
 from plausible.fitting import as_target, load_table
-from plausible.fitting.merl import NCELLS, RES, write_merl
+from plausible.models.merl import NCELLS, RES, write_merl
 
 HEADER = "wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,f\n"
 GOOD = "0,0,1,0.6,0,0.8,0.3\n"
@@ -93,7 +93,7 @@ def test_merl_all_missing(tmp_path):
 
 
 def test_merl_missing_where_every_sample_falls(tmp_path):
-    from plausible.fitting.merl import MerlBRDF
+    from plausible.models.merl import MerlBRDF
 
     v = _merl_values()
     v[:, :, :, :] = -1.0

@@ -10,7 +10,7 @@ import pytest
 import plausible
 from plausible.analysis import albedo, direction
 from plausible.fitting import MerlBRDF, read_merl, tabulate, write_merl
-from plausible.fitting.merl import NCELLS, RES, cell_centres
+from plausible.models.merl import NCELLS, RES, cell_centres
 
 from reference import check_sampling
 
@@ -186,7 +186,7 @@ def ward_table():
 
 
 def test_from_half_diff_places_the_half_vector_at_phi_h():
-    from plausible.fitting.merl import from_half_diff, half_diff
+    from plausible.models.merl import from_half_diff, half_diff
     from plausible.ops import NP
 
     th, td, pd, ph = 0.4, 0.7, 1.1, np.array([0.0, 0.9, 2.5, -2.0])
@@ -231,7 +231,7 @@ def test_an_anisotropic_fit_to_a_merl_table_recovers_both_roughnesses(ward_table
 def test_a_fit_the_samples_do_not_decide_warns(ward_table):
     # every half vector at phi_h = 0 (h_y = 0): Ward's alpha_y only scales the lobe, as rs does
     from plausible.fitting import UnconstrainedWarning, fit, metrics as M
-    from plausible.fitting.merl import from_half_diff, half_diff
+    from plausible.models.merl import from_half_diff, half_diff
     from plausible.ops import NP
 
     wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
@@ -247,7 +247,7 @@ def test_the_command_line_prints_the_unconstrained_warning(ward_table, tmp_path)
 
     from plausible.cli import main
     from plausible.fitting import metrics as M, save_table
-    from plausible.fitting.merl import from_half_diff, half_diff
+    from plausible.models.merl import from_half_diff, half_diff
     from plausible.ops import NP
 
     wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))

@@ -139,7 +139,7 @@ def test_pumped_up_announces_its_table_and_the_cache(tmp_path, monkeypatch):
     computes a table and where it caches it (PLAUSIBLE_CACHE_DIR); the table file
     lands there; a second load in a fresh process memory (same disk cache) reads
     it and says nothing."""
-    from plausible.models import pumped_up
+    from plausible.integrals import cache
 
     monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", str(tmp_path))
     d = {"type": "pumped_up", "base": "reciprocal-phong:ks=1:n=17.25"}
@@ -147,5 +147,5 @@ def test_pumped_up_announces_its_table_and_the_cache(tmp_path, monkeypatch):
     warn = [t for lv, t in lines if lv == mi.LogLevel.Warn]
     assert warn and all(str(tmp_path) in t and "PLAUSIBLE_CACHE_DIR" in t for t in warn)
     assert any(p.name.startswith("albedo-") for p in tmp_path.iterdir())
-    monkeypatch.setattr(pumped_up, "_TABLES", {})
+    monkeypatch.setattr(cache, "_TABLES", {})
     assert _load_logged(d) == []

@@ -8,7 +8,7 @@ import pytest
 
 from mi_helpers import interaction, mi, spectrum_np, upper_dirs, vec3
 
-from plausible.fitting.merl import RES, read_merl, write_merl
+from plausible.models.merl import RES, read_merl, write_merl
 
 pytestmark = pytest.mark.drjit
 
@@ -98,7 +98,7 @@ def test_white_furnace_of_a_tabulated_lambertian(tmp_path):
     cells that straddle it, which the table holds as 0: measured 6e-4 at most),
     and its sphere averages 0.7."""
     import plausible
-    from plausible.fitting.merl import tabulate
+    from plausible.models.merl import tabulate
     from test_render import furnace_scene
 
     path = write_merl(tmp_path / "lambert.binary", tabulate(plausible.make("lambertian", rd=0.7)))

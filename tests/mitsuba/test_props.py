@@ -79,7 +79,7 @@ def test_no_variant_error_names_each_reason(monkeypatch):
     monkeypatch.setattr(mi, "set_variant", refuse)
     with pytest.raises(RuntimeError, match="llvm_ad_rgb: ImportError: no llvm_ad_rgb here; "
                                            "scalar_rgb: ImportError: no scalar_rgb here"):
-        pm._ensure_variant()
+        pm.ensure_variant()
 
 
 def test_plugins_load_and_evaluate_in_a_scalar_variant():

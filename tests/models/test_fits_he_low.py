@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible import library
+from plausible import catalogue as library
 
 import bbm_reference as R
 

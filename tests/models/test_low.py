@@ -134,5 +134,5 @@ def test_smooth_sampling_density_integrates_to_the_valid_fraction():
     valid = np.mean(s.pdf > 0)
     import importlib
 
-    total = float(importlib.import_module("plausible.analysis.albedo").pdf_integrals(m, [wi])[0].value)
+    total = float(importlib.import_module("plausible.integrals.albedo").pdf_integrals(m, [wi])[0].value)
     assert total == pytest.approx(valid, abs=5 * math.sqrt(valid * (1 - valid) / 1e5) + 1e-4)

@@ -24,7 +24,7 @@ def test_as_pdf_with_subnormal_diffuse_albedo_is_the_limit_not_nan():
 
 def test_pumped_up_tables_of_nearby_exponents_are_not_shared():
     # the cache key was repr(model), 6 significant digits: n=20 and n=20.00004 read one table
-    from plausible.models.pumped_up import spec_of
+    from plausible.integrals.cache import spec_of
 
     a = plausible.make("reciprocal-phong", n=20.0)
     b = plausible.make("reciprocal-phong", n=20.00004)

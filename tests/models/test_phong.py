@@ -73,7 +73,7 @@ def test_lune_edge_hint_is_what_converges_the_cut_lobe():
 
 def test_half_vector_lune_is_where_the_mirror_cosine_vanishes():
     # independent truth: wo = 2 (wi.h) h - wi and R = (-wi_x, -wi_y, wi_z) directly
-    from plausible.analysis.quadrature import half_vector_lune
+    from plausible.integrals.quadrature import half_vector_lune
 
     rng = np.random.default_rng(3)
     for _ in range(20):

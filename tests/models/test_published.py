@@ -5,7 +5,7 @@ The formulas below are written straight from the definitions of bbm's headers
 ``ashikhminshirley.h``, ``microfacet.h``, ``ndf/beckmann.h``,
 ``maskingshadowing/vgroove.h``, ``bbm/fresnel_schlick.h``, ``bbm/fresnel_cook.h``,
 ``low.h``), with the parameters read from the data file's text by a regular
-expression (not by :mod:`plausible.library`'s parser), and evaluated in NumPy
+expression (not by :mod:`plausible.catalogue`'s parser), and evaluated in NumPy
 on random directions plus directions near each lobe's peak.
 """
 
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible.library import FIT_SETS
+from plausible.catalogue.fit_sets import FIT_SETS
 
 PI = math.pi
 

@@ -16,6 +16,7 @@ import pytest
 
 import plausible
 from plausible.analysis import albedo, direction
+from plausible.integrals import cache
 from plausible.models import pumped_up as pu
 from plausible.ops import NP
 from plausible.tables import AngleTable
@@ -390,21 +391,21 @@ def test_albedo_table_nodes_are_the_integrator_values():
 def test_building_the_same_model_twice_does_not_integrate_twice(monkeypatch, tmp_path):
     """In-memory cache, then the disk cache in a fresh process state (memory cleared)."""
     monkeypatch.setenv("PLAUSIBLE_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(pu, "_TABLES", {})
+    monkeypatch.setattr(cache, "_TABLES", {})
     calls = []
-    real = plausible.analysis.albedo_table
+    real = cache.albedo_table
 
     def counting(*a, **k):
         calls.append(1)
         return real(*a, **k)
 
-    monkeypatch.setattr(plausible.analysis, "albedo_table", counting)
+    monkeypatch.setattr(cache, "albedo_table", counting)
     spec = "reciprocal-phong:ks=0.7:n=8"
     m1 = pumped(spec)
     m2 = pumped(spec)
     assert len(calls) == 1 and m1.tables[0] is m2.tables[0]
     assert len(list(tmp_path.glob("albedo-*.npy"))) == 1
-    monkeypatch.setattr(pu, "_TABLES", {})
+    monkeypatch.setattr(cache, "_TABLES", {})
     m3 = pumped(spec)
     assert len(calls) == 1
     assert np.array_equal(m3.tables[0].values, m1.tables[0].values)

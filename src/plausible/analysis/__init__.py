@@ -7,7 +7,7 @@ callables to that contract.
 """
 
 from .adapters import CallableBxDF, as_bxdf
-from .albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, albedos, direction, hemispherical_albedo,
+from ..integrals.albedo import (AlbedoResult, albedo, albedo_curve, albedo_table, albedos, direction, hemispherical_albedo,
                      is_isotropic, pdf_integral, pdf_integrals)
 from .compensation import compensate
 from .checks import PropertyResult, energy, reciprocity, sampling_consistency

@@ -43,7 +43,9 @@ import sys
 
 import numpy as np
 
-from ..bxdf import CHUNK, HORIZON, Sample, _as_unit_interval, as_directions
+from ..bxdf import Sample
+from ..directions import CHUNK, as_directions, as_unit_interval
+from ..vec import HORIZON
 
 __all__ = ["CallableBxDF", "as_bxdf", "load_python", "tolerances"]
 
@@ -130,16 +132,16 @@ def load_python(target: str):
     """
     mod_name, sep, attr = target.partition(":")
     if not sep or not mod_name or not attr:
-        raise ValueError(f"--python must look like package.module:function, got {target!r}")
+        raise ValueError(f"target must look like package.module:function, got {target!r}")
     try:
         obj = importlib.import_module(mod_name)
     except ImportError as e:
-        raise ValueError(f"--python {target}: cannot import module {mod_name!r} ({e})") from None
+        raise ValueError(f"target {target}: cannot import module {mod_name!r} ({e})") from None
     for part in attr.split("."):
         try:
             obj = getattr(obj, part)
         except AttributeError:
-            raise ValueError(f"--python {target}: module {mod_name!r} has no attribute {attr!r}") from None
+            raise ValueError(f"target {target}: module {mod_name!r} has no attribute {attr!r}") from None
     return obj
 
 
@@ -240,7 +242,7 @@ class CallableBxDF:
         if self._sample is None or self._pdf is None:
             raise NotImplementedError(f"{self.name}: {self.not_applicable['sampling']}")
         wi = as_directions("wi", wi)
-        u = _as_unit_interval(u)
+        u = as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         a = np.ascontiguousarray(np.broadcast_to(wi, shape + (3,)).reshape(-1, 3))
         uu = np.ascontiguousarray(np.broadcast_to(u, shape + (3,)).reshape(-1, 3))

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..progress import start
 from ..text import jsonable
-from .albedo import albedos, direction, is_isotropic, pdf_integrals
+from ..integrals.albedo import albedos, direction, is_isotropic, pdf_integrals
 
 #: ``cos(theta)`` of the incidences between 89.9 degrees and the horizon that every
 #: energy check includes: albedos that diverge at grazing incidence (Ward 1992 as

@@ -1,6 +1,6 @@
 """Which published fits are physically plausible?  ``check`` of every MERL fit.
 
-For each material of each loadable fit set (:mod:`plausible.library`) this
+For each material of each loadable fit set (:mod:`plausible.catalogue`) this
 measures
 
 * reciprocity: :func:`plausible.analysis.reciprocity` of the whole model (the
@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..library import fit_set, fits as all_fits, material, materials
-from .albedo import TOL as ALBEDO_TOL, albedos, direction
+from ..catalogue import fit_set, fits as all_fits, material, materials
+from ..integrals.albedo import TOL as ALBEDO_TOL, albedos, direction
 from .checks import reciprocity
 
 #: Incidence angles (degrees) of the albedo grid: dense toward grazing, where
@@ -90,7 +90,7 @@ def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG, tol: float = ALBEDO_TOL):
     """``(values, errors)`` of shape ``(len(thetas_deg), channels)``: the directional
     albedo of a :class:`~plausible.models.sum.Sum` as ``sum_k s_k a_k(theta)``,
     each part's albedos at every angle refined together
-    (:func:`~plausible.analysis.albedo.albedos`) to the error bound ``tol``."""
+    (:func:`~plausible.integrals.albedo.albedos`) to the error bound ``tol``."""
     ch = model.channels or 1
     vals = np.zeros((len(thetas_deg), ch))
     errs = np.zeros((len(thetas_deg), ch))
@@ -129,7 +129,7 @@ def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG, qui
 def work_list(fits=None, names=None) -> list[tuple]:
     """``(material, fit)`` of every material (or ``names``) of every loadable fit
     set (or ``fits``), in table order.  Fit sets that cannot be loaded are
-    skipped (see :attr:`plausible.library.FitSet.reason`)."""
+    skipped (see :attr:`plausible.catalogue.FitSet.reason`)."""
     keys = [fit_set(k).key for k in fits] if fits else [f.key for f in all_fits() if f.built]
     out = []
     for key in keys:

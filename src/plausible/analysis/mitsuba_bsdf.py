@@ -56,9 +56,12 @@ import math
 
 import numpy as np
 
-from ..bxdf import CHUNK, HORIZON, Sample, _as_array, _as_unit_interval, _check_directions
+from ..bxdf import Sample
+from ..directions import CHUNK, as_array, as_unit_interval, check_directions
+from ..mitsuba import VARIANTS, ensure_variant
+from ..vec import HORIZON
 
-__all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml", "ensure_variant"]
+__all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml"]
 
 #: Relative precision declared for a float32 Mitsuba variant (see the module docstring):
 #: float32 rounds a direction by 2^-24 relative, and a sharp lobe's value moves by far more
@@ -67,36 +70,24 @@ __all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml", "ensure_variant"]
 #: by 2.1e-5 at grazing).
 FLOAT32_PRECISION = 1e-4
 
-#: The variant set when none is: LLVM, RGB, float32 (the only precision installed).
-DEFAULT_VARIANT = "llvm_ad_rgb"
+#: The variant set when none is (:func:`plausible.mitsuba.ensure_variant`): LLVM, RGB, float32.
+DEFAULT_VARIANT = VARIANTS[0]
 
 #: Incidence angles (degrees) of the delta-lobe reflectance of a purely specular plugin.
 DELTA_THETAS = (0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 88, 89, 89.5, 89.9)
-
-
-def ensure_variant():
-    """Import Mitsuba and set :data:`DEFAULT_VARIANT` if no variant is set; return ``mi``."""
-    import mitsuba as mi
-
-    if mi.variant() is None:
-        try:
-            mi.set_variant(DEFAULT_VARIANT)
-        except (ImportError, AttributeError) as e:
-            raise RuntimeError(f"Mitsuba variant {DEFAULT_VARIANT} cannot be set ({e})") from None
-    return mi
 
 
 def load_bsdf_dict(d: dict):
     """``mi.load_dict(d)`` as a BSDF (sets the variant if none is); ValueError if it is not one."""
     mi = ensure_variant()
     if not isinstance(d, dict) or "type" not in d:
-        raise ValueError(f"--mitsuba must be a JSON object with a 'type', as mi.load_dict takes it; got {d!r}")
+        raise ValueError(f"d must be a dict with a 'type', as mi.load_dict takes it; got {d!r}")
     try:
         obj = mi.load_dict(d)
     except Exception as e:  # Mitsuba raises RuntimeError or its own exceptions with the plugin's message
         raise ValueError(f"mi.load_dict({d}) failed: {str(e).strip().splitlines()[-1]}") from None
     if not isinstance(obj, mi.BSDF):
-        raise ValueError(f"--mitsuba: {d.get('type')!r} is a Mitsuba {type(obj).__name__}, not a BSDF")
+        raise ValueError(f"{d.get('type')!r} is a Mitsuba {type(obj).__name__}, not a BSDF")
     return obj
 
 
@@ -110,15 +101,16 @@ def load_bsdf_xml(path: str, id: str | None = None):
     try:
         root = ET.parse(path).getroot()
     except (OSError, ET.ParseError) as e:
-        raise ValueError(f"--mitsuba-xml {path}: {e}") from None
+        raise ValueError(f"{path}: {e}") from None
     ids = [el.get("id") for el in root.iter("bsdf") if el.get("id")]
     if root.tag == "bsdf" and (id is None or root.get("id") == id):
         return mi.load_file(path)
     if id is None:
-        raise ValueError(f"--mitsuba-xml {path}: give --id NAME; BSDF ids in the file: {', '.join(ids) or 'none'}")
+        raise ValueError(f"{path}: the root is not a <bsdf> and no id was given; BSDF ids in the file: "
+                         f"{', '.join(ids) or 'none'}")
     el = next((e for e in root.iter("bsdf") if e.get("id") == id), None)
     if el is None:
-        raise ValueError(f"--mitsuba-xml {path}: no <bsdf id={id!r}>; BSDF ids in the file: {', '.join(ids) or 'none'}")
+        raise ValueError(f"{path}: no <bsdf id={id!r}>; BSDF ids in the file: {', '.join(ids) or 'none'}")
     try:   # load the scene, so that defaults, references and textures resolve as Mitsuba resolves them
         scene = mi.load_file(path)
         for shape in scene.shapes():
@@ -131,7 +123,7 @@ def load_bsdf_xml(path: str, id: str | None = None):
     try:
         return mi.load_string(ET.tostring(el, encoding="unicode"))
     except Exception as e:
-        raise ValueError(f"--mitsuba-xml {path} --id {id}: {str(e).strip().splitlines()[-1]}") from None
+        raise ValueError(f"{path}, id {id!r}: {str(e).strip().splitlines()[-1]}") from None
 
 
 def _flags(mi, bsdf):
@@ -276,7 +268,7 @@ class MitsubaBSDF:
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
         wi = _as_float32_directions("wi", wi)
-        u = _as_unit_interval(u)
+        u = as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         a = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
         uu = np.minimum(np.broadcast_to(u, shape + (3,)).reshape(-1, 3), 1 - 2.0 ** -24).astype(np.float32)
@@ -369,7 +361,7 @@ class MitsubaBSDF:
     def annotate(self, report):
         """Add ``energy+delta`` (delta reflectance plus the smooth albedo of the
         ``energy`` grid; max over it <= 1 + 1e-4) when the plugin has delta lobes."""
-        from .albedo import direction
+        from ..integrals.albedo import direction
         from .checks import PropertyResult
 
         if not self.delta_components or (self.mode, self.side) != ("radiance", "front"):
@@ -401,11 +393,11 @@ def _unit32(w, nrm):
 
 
 def _as_float32_directions(name, w):
-    """Validated directions (as :func:`plausible.bxdf.as_directions`), normalised only
+    """Validated directions (as :func:`plausible.directions.as_directions`), normalised only
     where they are not unit vectors to float32 precision: a direction the adapter
     returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
-    a = _as_array(name, w)
-    _check_directions(name, a)
+    a = as_array(name, w)
+    check_directions(name, a)
     return _unit32(a, np.sqrt(np.sum(a * a, axis=-1)))
 
 

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass, field
 
 from .adapters import as_bxdf, tolerances
-from .albedo import direction, is_isotropic
+from ..integrals.albedo import direction, is_isotropic
 from ..progress import start, within
 from ..text import jsonable
 from .checks import (ENERGY_THETAS, PropertyResult, energy, energy_directions, grazing_thetas, reciprocity,

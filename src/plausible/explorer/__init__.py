@@ -39,7 +39,7 @@ def bind(host: str = "127.0.0.1", port: int = 8765):
     except OSError as e:
         sock.close()
         raise ValueError(f"cannot listen on {host}:{port}: {e.strerror} (another program, or another "
-                         f"plausible explore, may hold the port: choose another with --port)") from None
+                         f"explorer, may hold the port: choose another port)") from None
     sock.set_inheritable(True)
     return sock
 

@@ -76,41 +76,20 @@ def param_spec(p, value=None) -> dict:
     return {"name": p.name, "kind": kind, "doc": p.doc,
             "default": _jsonable_value(p.default if value is None else value), "lo": lo, "hi": hi,
             "range": p.range_text(), "scale": _scale(p), "integer": bool(p.integer),
-            "choices": list(p.choices)}
-
-
-#: The catalogue's entry for the published MERL fits (:func:`plausible.material`).
-MATERIAL = "material"
-
-
-def _material_entry() -> dict:
-    from .. import library
-
-    names = sorted(library.materials())
-    fits = [f.key for f in library.fits() if f.built]
-    return {"name": MATERIAL, "reciprocal": True, "energy_conserving": False,
-            "description": "A published fit of a MERL material (Ngan, Durand & Matusik 2005; Low et al. "
-                           "2012): plausible.material(name, fit), a sum of the fitted model's terms.",
-            "params": [{"name": "name", "kind": "choice", "doc": "MERL material", "default": "alum-bronze",
-                        "choices": names, "range": f"{len(names)} materials", "lo": 0, "hi": 0,
-                        "scale": "linear", "integer": False},
-                       {"name": "fit", "kind": "choice", "doc": "published fit set",
-                        "default": library.DEFAULT_FIT, "choices": fits, "range": f"{len(fits)} fit sets",
-                        "lo": 0, "hi": 0, "scale": "linear", "integer": False}]}
+            "choices": p.options()}
 
 
 def model_catalogue() -> list[dict]:
     """Every registered model: name, description, claims, parameter specs (with
-    the defaults as the model resolves them); last, the published materials
-    (:data:`MATERIAL`, parameters ``name`` and ``fit``)."""
+    the defaults as the model resolves them); last, the catalogue entries (the
+    published materials, parameters ``name`` and ``fit``)."""
     out = []
-    for name in registry.names():
+    for name in registry.names(catalogue=True):
         info = registry.info(name)
         m = info.cls()
         out.append({"name": name, "description": info.description, "reciprocal": info.reciprocal,
                     "energy_conserving": info.energy_conserving,
                     "params": [param_spec(p, m.params[p.name]) for p in info.params]})
-    out.append(_material_entry())
     return out
 
 
@@ -118,14 +97,6 @@ def build(name: str, params: dict | None = None):
     """The model ``name`` with ``params`` as the page sends them (numbers, lists
     of numbers, strings in the command line's syntax).  Raises the model's own
     :class:`ValueError` (parameter, range, value) for anything out of range."""
-    if name == MATERIAL:
-        from .. import library
-
-        ps = dict(params or {})
-        unknown = sorted(set(ps) - {"name", "fit"})
-        if unknown:
-            raise ValueError(f"material: unknown parameter(s) {', '.join(unknown)}; allowed: name, fit")
-        return library.material(str(ps.get("name", "alum-bronze")), fit=str(ps.get("fit", library.DEFAULT_FIT)))
     info = registry.info(name)
     kinds = {p.name: p.kind for p in info.params}
     ps = {}
@@ -174,8 +145,8 @@ def lobe3d(model, theta_i_deg: float, n_theta: int = 24, n_phi: int = 48) -> dic
 def half_diff_slice(model, n: int = 64, phi_d_deg: float = 90.0) -> dict:
     """``f`` (channel mean) over ``theta_h`` (rows) x ``theta_d`` (columns), both
     0..90 degrees at cell centres, ``phi_h = 0`` and ``phi_d`` (Rusinkiewicz
-    coordinates, :func:`plausible.fitting.merl.from_half_diff`)."""
-    from ..fitting.merl import from_half_diff
+    coordinates, :func:`plausible.models.merl.from_half_diff`)."""
+    from ..models.merl import from_half_diff
 
     a = (np.arange(n) + 0.5) / n * 90.0
     TH, TD = np.meshgrid(np.radians(a), np.radians(a), indexing="ij")
@@ -209,7 +180,7 @@ def verdict(model) -> dict:
     rep = check(model, quick=True)
     d = json.loads(json.dumps(rep.to_dict(), default=str))
     info = model.info if getattr(model, "info", None) is not None else None
-    if info is None:        # a published material: reciprocal when its terms are, no energy claim
+    if info is None or info.catalogue:   # a published material: reciprocal when its terms are, no energy claim
         from types import SimpleNamespace
 
         info = SimpleNamespace(reciprocal=bool(getattr(model, "reciprocal", False)), energy_conserving=False)
@@ -243,7 +214,7 @@ def export(model, fmt: str) -> tuple[str, str]:
     if fmt not in FORMATS:
         raise ValueError(f"export format must be one of {', '.join(FORMATS)}, got {fmt!r}")
     stem = model.name
-    if model.info is None and "@" in stem:        # a published material (plausible.material)
+    if getattr(model.info, "catalogue", False) or (model.info is None and "@" in stem):   # a published material
         return _export_material(model, fmt)
     if fmt == "spec":
         text = spec_of(model) + "\n"
@@ -261,11 +232,13 @@ def export(model, fmt: str) -> tuple[str, str]:
 def _export_material(model, fmt: str) -> tuple[str, str]:
     """A published material: ``material:NAME@FIT``, the ``plausible_material`` plugin,
     or its GLSL / ``.brdf`` (every term baked in)."""
+    from ..catalogue.entry import PREFIX
+
     name, fit = model.name.split("@", 1)
     stem = f"{name}-{fit.replace('/', '-')}"
     d = {"type": "plausible_material", "name": name, "fit": fit}
     if fmt == "spec":
-        text = f"material:{model.name}\n"
+        text = f"{PREFIX}{model.name}\n"
     elif fmt == "mitsuba-dict":
         text = json.dumps(d, indent=2) + "\n"
     elif fmt == "mitsuba-xml":
@@ -278,5 +251,5 @@ def _export_material(model, fmt: str) -> tuple[str, str]:
     return stem + FORMATS[fmt][0], text
 
 
-__all__ = ["FORMATS", "MATERIAL", "albedo", "build", "export", "half_diff_slice", "lobe3d", "model_catalogue",
+__all__ = ["FORMATS", "albedo", "build", "export", "half_diff_slice", "lobe3d", "model_catalogue",
            "param_spec", "plane", "shader", "verdict"]

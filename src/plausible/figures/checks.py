@@ -5,7 +5,7 @@ from __future__ import annotations
 from plausible import registry
 from plausible.progress import start, within
 
-from . import figure
+from .core import figure
 
 QUICK_MODELS = ("lambertian", "modified-phong", "ashikhmin-shirley")
 

@@ -13,7 +13,7 @@ from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
 from plausible.progress import within
 
-from . import figure
+from .core import figure
 
 INCIDENCE = (0.0, 30.0, 60.0, 80.0)
 

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from . import figure
+from .core import figure
 from . import scenes as S
 
 #: Materials of the check figure (diffuse, glossy plastic, metal, paint, fabric, the brightest ones).
@@ -36,7 +36,7 @@ FEW_MATERIALS = {"ngan2005/he": 2}
         "(ngan2005/he) are checked on the first two materials only: their series costs about 13 s a fit.",
         materials=CHECK_MATERIALS, fits="every loadable fit set (quick: 2 materials x 2 fits)")
 def materials_check(ctx, materials, fits):
-    from plausible import library
+    from plausible import catalogue as library
     from plausible.analysis.checks import grazing_thetas
     from plausible.analysis.materials import THETAS_DEG, TOL, check_fits, markdown
 
@@ -142,7 +142,7 @@ def _spheres(mi, bsdfs, cols, res_cell, spp):
         "and a distant light. The measured MERL data themselves are not shown.", renders=True,
         fit="ngan2005/ashikhmin-shirley", material="gold-metallic-paint")
 def materials_atlas(ctx, fit, material):
-    from plausible import library
+    from plausible import catalogue as library
 
     mi = S.mitsuba()
     names = list(library.materials(fit))

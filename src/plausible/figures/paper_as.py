@@ -10,7 +10,7 @@ import numpy as np
 import plausible
 from plausible.analysis import albedo, direction
 
-from . import figure
+from .core import figure
 from . import scenes as S
 
 EXPONENTS = (10, 100, 1000, 10000)

@@ -13,7 +13,7 @@ from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
 from plausible.progress import within
 
-from . import figure
+from .core import figure
 from .lobes import plane_f
 
 SRC = "Neumann, Neumann & Szirmay-Kalos 1999"
@@ -112,6 +112,11 @@ if "he-torrance" in plausible.registry.names():
     FIG1_MODELS = {"Phong (n = 150)": FIG1_MODELS.pop("Phong (n = 150)"), HE_LABEL: HE_SPEC, **FIG1_MODELS}
 
 
+def _greek(label: str) -> str:
+    """A legend label as the paper prints it (the CSV headers keep the ASCII names)."""
+    return label.replace("sigma0", "σ0").replace("tau", "τ")
+
+
 def total_albedo(model, wi) -> float:
     """The directional albedo including the model's delta lobes (He-Torrance's coherent
     specular part, reported by ``delta_lobes``), channel mean."""
@@ -124,7 +129,7 @@ def total_albedo(model, wi) -> float:
     return a
 
 
-@figure("neumann-fig1", "Albedo at grazing: Phong, Cook-Torrance and Ward", f"{SRC}, fig. 1",
+@figure("neumann-fig1", "Albedo at grazing: Phong, He-Torrance, Cook-Torrance and Ward", f"{SRC}, fig. 1",
         "Fig. 1. Albedo functions of the Phong (n = 150), He-Torrance (σ0 = 0.1, τ = 1.7), Cook-Torrance "
         "(m = 0.1) and Ward (m = 0.1) models. [Sec. 2:] \u201cNote that the Cook-Torrance and the Ward models "
         "diverge at grazing angles, while the Phong, He-Torrance and Ward BRDFs badly decrease for greater "
@@ -145,10 +150,12 @@ def fig1(ctx, models):
                                  for d in near])
         ctx.tick(len(near))
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10.5, 4.0))
+    # Ward is dashed: up to 80 degrees it lies on Phong (n = 150 and m = 0.1 are the same width)
+    style = {label: dict(ls="--", lw=1.8) if label.startswith("Ward") else {} for label in curves}
     for label, v in curves.items():
-        ax.plot(np.degrees(th), v, label=label)
+        ax.plot(np.degrees(th), v, label=_greek(label), **style[label])
     for label, v in tails.items():
-        ax2.plot(near, v, label=label)
+        ax2.plot(near, v, label=_greek(label), **style[label])
     for a in (ax, ax2):
         a.set_yscale("log")
         a.axhline(1.0, color="0.5", lw=0.8, ls="--")
@@ -430,8 +437,14 @@ for _i, (_base, _corr, _fig) in enumerate([("reciprocal-phong", "max", "3"), ("r
     _cap = {"max": f"Fig. {_fig}. Albedo and reflected radiance of the reciprocal {_model} model and its pumped-up "
                    "versions (n = 20). [Sec. 3.1:] \u201cNote that the albedos resulted by recursive pumping-ups "
                    "converge to the albedo of the ideal mirror (constant 1).\u201d",
-            "controlled": f"Fig. {_fig}. Controlled pumping-up of the reciprocal {_model} model (n = 20). [Sec. 3.2:] "
-                          "\u201cThe process will converge to an albedo that is below the constant 1. Note that for "
+            "controlled": (f"Fig. {_fig}. Controlled pumping-up of the reciprocal {_model} model (n = 20). "
+                           if _fig == "5" else
+                           # fig. 6's caption is not in the text of the paper we have; sec. 3.2 names the figure
+                           "[Fig. 6's caption is missing from our copy of the paper; sec. 3.2:] \u201cThe albedos and "
+                           "the output radiances of the Phong and the Blinn models after controlled pumping-up are "
+                           "shown in figure 5 and in figure 6, respectively.\u201d ")
+                          + "[Sec. 3.2:] \u201cThe process will converge to an albedo that is below the constant 1. "
+                          "Note that for "
                           "n = 20, the Phong model is worth pumping-up 2 or 3 times, but the albedo of the Blinn "
                           "model does not significantly increase with the second and consecutive pumping-up "
                           "operations.\u201d [Sec. 5:] \u201cwe introduced the controlled albedo pumping-up, which "
@@ -660,7 +673,7 @@ def perceptual_checks(least_squares: dict, perceptual: dict) -> list:
         "corresponds to the logarithmic characteristics of the human vision system.\u201d",
         model="neumann-metal", reference="cook-torrance:m=0.2:rs=0.9", thetas_deg=(0.0, 30.0, 60.0, 80.0))
 def perceptual(ctx, model, reference, thetas_deg):
-    from plausible.fitting.fit import as_target, fit
+    from plausible.fitting import as_target, fit
 
     ref = plausible.registry.make_from_spec(reference)
     if ctx.quick:

@@ -6,7 +6,7 @@ import numpy as np
 
 import math
 
-from . import figure
+from .core import figure
 from . import scenes as S
 
 #: The notes' table of ``evaluate`` tests ("No lets think about other test cases"):

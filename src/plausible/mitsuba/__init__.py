@@ -46,18 +46,24 @@ def plugin_names() -> dict:
     return out
 
 
-def _ensure_variant():
-    """Set ``llvm_ad_rgb``, else ``scalar_rgb``, when no variant is set; the error
-    lists why each one failed."""
+#: The variants :func:`ensure_variant` tries, in order, when none is set.
+VARIANTS = ("llvm_ad_rgb", "scalar_rgb")
+
+
+def ensure_variant():
+    """Import Mitsuba and, when no variant is set, set the first of :data:`VARIANTS`
+    that loads; return ``mi``.  The one variant setter of plausible (the plugins
+    and the adapter of Mitsuba BSDFs, :mod:`plausible.analysis.mitsuba_bsdf`);
+    its error lists why each variant failed."""
     import mitsuba as mi
 
     if mi.variant() is not None:
-        return
+        return mi
     reasons = []
-    for v in ("llvm_ad_rgb", "scalar_rgb"):
+    for v in VARIANTS:
         try:
             mi.set_variant(v)
-            return
+            return mi
         except (ImportError, AttributeError, RuntimeError) as err:
             reasons.append(f"{v}: {type(err).__name__}: {err}")
     raise RuntimeError("plausible.mitsuba: no Mitsuba variant could be set (" + "; ".join(reasons) + ")")
@@ -78,7 +84,7 @@ def register(variant: str | None = None) -> list:
 
     if variant is not None:
         mi.set_variant(variant)
-    _ensure_variant()
+    ensure_variant()
     out = []
     classes = _REGISTERED.setdefault(mi.variant(), {})
     for plugin, model in plugin_names().items():
@@ -97,5 +103,5 @@ def register(variant: str | None = None) -> list:
     return out
 
 
-__all__ = ["register", "plugin_names", "aliases_for", "make_plugin_class", "make_merl_class",
+__all__ = ["VARIANTS", "ensure_variant", "register", "plugin_names", "aliases_for", "make_plugin_class", "make_merl_class",
            "COMMON_ALIASES", "PLUGIN_ALIASES"]

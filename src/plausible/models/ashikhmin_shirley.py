@@ -24,11 +24,12 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
 from ..fresnel import schlick
 from ..ops import PI
 from ..params import Param
 from ..registry import register
+from ..vec import above
 
 REFERENCES = (
     "Ashikhmin & Shirley, An anisotropic Phong BRDF model, JGT 5(2), 2000",

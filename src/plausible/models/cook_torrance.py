@@ -24,10 +24,11 @@ Jacobian (Walter et al. 2007, eq. 20) gives the ``1/4`` used here.
 from __future__ import annotations
 
 from .. import fresnel, vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
 from ..ops import PI
 from ..params import Param
 from ..registry import register
+from ..vec import above
 
 GEOMETRY = ("vgroove", "none")
 

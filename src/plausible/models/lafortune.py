@@ -63,10 +63,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, above
+from ..bxdf import BxDF, Lobe
 from ..ops import INV_PI, PI
 from ..params import Param, parse_groups
 from ..registry import register
+from ..vec import above
 
 #: Largest lobe exponent accepted (the same range as the Phong family's ``n``).
 N_MAX = 1e6

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from .. import warps
-from ..bxdf import BxDF, Lobe, above
+from ..bxdf import BxDF, Lobe
 from ..ops import INV_PI
 from ..params import Param
 from ..registry import register
+from ..vec import above
 
 
 def lambert(ops, wi, wo, rd):

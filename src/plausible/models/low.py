@@ -29,10 +29,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import fresnel, vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
+from ..vec import above
 from .cook_torrance import vgroove_g
 
 REFERENCES = (

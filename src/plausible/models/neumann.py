@@ -8,9 +8,10 @@ eq. 22: ``f = c_n (R.V)^n / max(N.L, N.V)`` with ``c_n <= (n + 2) / (2 pi)``.
 from __future__ import annotations
 
 from .. import fresnel, vec
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
 from ..params import Param
 from ..registry import register
+from ..vec import above
 from .phong import EXPONENT, lobe_pdf, phong_lobe, phong_norm, phong_sample
 
 

@@ -24,11 +24,12 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
 from ..text import fmt
+from ..vec import above
 
 EXPONENT = dict(lo=0.0, hi=1e6, doc="Phong exponent n (larger is sharper)", extremes=(0.0, 1.0, 1e4))
 

@@ -29,8 +29,9 @@ References
 from __future__ import annotations
 
 from .. import fresnel, vec
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
 from ..params import Param
+from ..vec import above
 from . import ashikhmin_shirley as AS
 from .cook_torrance import CookTorrance
 from .phong import EXPONENT, _BlinnLobeModel, blinn_lobe, phong_norm

@@ -49,35 +49,16 @@ defined by an integral of its base.
 
 from __future__ import annotations
 
-import hashlib
-import inspect
-import os
 from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
 from .. import fresnel, vec
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
+from ..integrals.cache import albedo_table_of, horizon_albedos, spec_of
 from ..params import Param
 from ..registry import register
-from ..registry import spec_of as registry_spec_of
-
-#: Tables built in this process: key -> AngleTable.
-_TABLES: dict = {}
-
-
-def table_cache_dir() -> Path | None:
-    """Where albedo tables are cached on disk: ``$PLAUSIBLE_CACHE_DIR``, else
-    ``$XDG_CACHE_HOME/plausible`` or ``~/.cache/plausible``; ``PLAUSIBLE_CACHE_DIR=""``
-    turns the disk cache off."""
-    env = os.environ.get("PLAUSIBLE_CACHE_DIR")
-    if env is not None:
-        return Path(env) if env else None
-    root = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(root) / "plausible"
-
+from ..vec import above
 
 @dataclass(frozen=True)
 class ModelParam(Param):
@@ -107,121 +88,6 @@ class ModelParam(Param):
                              f"needs a symmetric BRDF f(L, V) = f(V, L) (its energy proof, eq. 18, "
                              f"uses the symmetry). Use a reciprocal model, e.g. 'reciprocal-phong'.")
         return model
-
-
-def spec_of(model) -> str:
-    """A canonical text of a model and its parameters (the cache key): the
-    registry's spec string, whose floats are exact (``repr``), else the class and
-    its parameters at full precision.  Not ``repr(model)``: it prints 6
-    significant digits, so ``n=20`` and ``n=20.00004`` shared a table.  A model
-    that names itself (``cache_key()``, e.g. a foreign BSDF held as a model) gives
-    that; a sum (a published material) its parts and scales."""
-    key = getattr(model, "cache_key", None)
-    if callable(key):
-        return key()
-    if getattr(model, "info", None) is None and hasattr(model, "parts") and hasattr(model, "scales"):
-        return "sum(" + ", ".join(f"[{spec_of(m)}]*{_exact(s)}" for m, s in zip(model.parts, model.scales)) + ")"
-    if getattr(model, "info", None) is not None:
-        return registry_spec_of(model)
-    params = getattr(model, "params", None)
-    if isinstance(params, dict):
-        return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
-            f"{k}={_exact(v)}" for k, v in params.items()) + ")"
-    return repr(model)
-
-
-def _exact(v) -> str:
-    """A parameter value as text that tells apart any two different values."""
-    if isinstance(v, BxDF):
-        return "[" + spec_of(v) + "]"
-    if isinstance(v, np.ndarray):
-        return repr(v.astype(np.float64).tolist())
-    if isinstance(v, (list, tuple)):
-        return "(" + ", ".join(_exact(x) for x in v) + ")"
-    return repr(float(v)) if isinstance(v, float) else repr(v)
-
-
-@lru_cache(maxsize=None)
-def _source_hash(cls) -> str:
-    """Hash of the source that determines a table: the module of the model class
-    ``cls``, the integrator and the table code (read once per class)."""
-    from .. import tables
-    from ..analysis import albedo_table  # its module is the integrator's
-
-    h = hashlib.sha1()
-    for obj in (cls, albedo_table, tables):
-        try:
-            h.update(inspect.getsource(inspect.getmodule(obj)).encode())
-        except (OSError, TypeError):
-            h.update(repr(obj).encode())
-    return h.hexdigest()[:16]
-
-
-def _cached(kind: str, model, compute, wrap=lambda v: v):
-    """``wrap(values)`` of the array ``compute()`` for ``model``, cached in memory
-    (:data:`_TABLES`) and on disk as ``{kind}-{digest}.npy`` (see :func:`table_cache_dir`)."""
-    key = kind + "|" + spec_of(model) + "|" + _source_hash(type(model))
-    if key in _TABLES:
-        return _TABLES[key]
-    digest = hashlib.sha1(key.encode()).hexdigest()
-    cache = table_cache_dir()
-    # a model that says nothing outside this process names it (a Python callable) stays in memory
-    path = cache / f"{kind}-{digest}.npy" if cache and getattr(model, "disk_cache", True) else None
-    out = None
-    if path is not None and path.exists():
-        try:
-            out = wrap(np.load(path))
-        except (OSError, ValueError):
-            out = None
-    if out is None:
-        values = compute()
-        out = wrap(values)
-        if path is not None:
-            try:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_suffix(f".{os.getpid()}.tmp.npy")
-                np.save(tmp, values)
-                os.replace(tmp, path)
-            except OSError:
-                pass
-    _TABLES[key] = out
-    return out
-
-
-def albedo_table_of(model, progress=None):
-    """The (cached) albedo table of ``model``: memory first, then disk, else integrated
-    (reported to ``progress``, a :mod:`plausible.progress` factory; with None, to the
-    ambient reporter: the command line's bar)."""
-    from ..analysis import albedo_table
-    from ..tables import AngleTable
-
-    return _cached("albedo", model, lambda: albedo_table(model, progress=progress).values, AngleTable)
-
-
-#: ``cos(theta)`` of the two probes of :func:`horizon_albedos`: the table's last
-#: node lies 1e-6 rad above the horizon; 1e-9 is as close as the energy check goes.
-HORIZON_COS = (1e-6, 1e-9)
-
-
-def horizon_albedos(model, progress=None) -> np.ndarray:
-    """The largest directional albedo of ``model`` over a few azimuths (one for an
-    isotropic model, four otherwise) at ``cos(theta)`` = each of :data:`HORIZON_COS`
-    (cached like the tables).  ``progress``, if given, is called with the number of
-    albedo evaluations just done."""
-    from ..analysis import albedo, is_isotropic
-
-    def compute():
-        phis = (0.0,) if is_isotropic(model) else tuple(k * np.pi / 4 for k in range(4))
-        out = []
-        for c in HORIZON_COS:
-            s = np.sqrt(1.0 - c * c)
-            out.append(max(float(np.max(albedo(model, np.array([s * np.cos(p), s * np.sin(p), c])).value))
-                           for p in phis))
-            if progress:
-                progress(len(phis))
-        return np.array(out)
-
-    return _cached("horizon", model, compute)
 
 
 def check_bounded_albedo(model, owner: str = "PumpedUp", progress=None) -> None:
@@ -314,7 +180,7 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
-        self.disk_cache = getattr(base, "disk_cache", True)
+        self.disk_cache = getattr(base, "disk_cache", True)   # a base known only in this process
         if self.params["times"] > 0:
             check_bounded_albedo(base, progress=progress)
         self.tables = []

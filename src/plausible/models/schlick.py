@@ -47,10 +47,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import fresnel, vec, warps
-from ..bxdf import BxDF, Lobe, above, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
 from ..ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
+from ..vec import above
 
 
 def zenith(ops, sin2_h, r):

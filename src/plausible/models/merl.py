@@ -41,7 +41,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, above
+from ..bxdf import BxDF
+from ..vec import above
 
 RES = (90, 90, 180)                       # theta_h, theta_d, phi_d
 NCELLS = RES[0] * RES[1] * RES[2]
@@ -189,7 +190,7 @@ class MerlBRDF(BxDF):
         point along both tangents and in between.  (At ``phi_h = 0`` for all,
         every half vector has ``h_y = 0`` and an anisotropic model's
         ``alpha_y`` is traded freely against its scale.)"""
-        from ..bxdf import as_directions, split
+        from ..directions import as_directions, split
         from ..ops import NP
 
         a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))
@@ -204,7 +205,7 @@ class MerlBRDF(BxDF):
 
     def missing(self, wi, wo) -> np.ndarray:
         """Boolean mask: the pair falls in a cell without a measurement."""
-        from ..bxdf import as_directions, split
+        from ..directions import as_directions, split
         from ..ops import NP
 
         a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))

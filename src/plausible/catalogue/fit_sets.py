@@ -36,16 +36,16 @@ from importlib import resources
 
 import numpy as np
 
-from .models.ashikhmin_shirley import AshikhminShirleySpecular
-from .models.cook_torrance import CookTorrance
-from .models.he_torrance import HeTorrance
-from .models.lafortune import Lafortune
-from .models.lambert import Lambertian
-from .models.low import LowMicrofacet, LowSmooth
-from .models.published import AshikhminShirleyDielectric, CookTorranceWide, NganBlinnPhong
-from .models.sum import Sum
-from .models.ward import Ward
-from .ops import PI
+from ..models.ashikhmin_shirley import AshikhminShirleySpecular
+from ..models.cook_torrance import CookTorrance
+from ..models.he_torrance import HeTorrance
+from ..models.lafortune import Lafortune
+from ..models.lambert import Lambertian
+from ..models.low import LowMicrofacet, LowSmooth
+from ..models.published import AshikhminShirleyDielectric, CookTorranceWide, NganBlinnPhong
+from ..models.sum import Sum
+from ..models.ward import Ward
+from ..ops import PI
 
 NGAN = "A. Ngan, F. Durand, W. Matusik, Experimental analysis of BRDF models, EGSR 2005"
 LOW = ("J. Löw, J. Kronander, A. Ynnerman, J. Unger, BRDF models for accurate and efficient "

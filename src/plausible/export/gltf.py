@@ -1,0 +1,169 @@
+"""Write materials of the ``gltf-pbr`` model as a glTF 2.0 file: one UV sphere per material.
+
+References
+----------
+* The Khronos 3D Formats Working Group, *glTF 2.0 Specification* (sections
+  "Buffers and Buffer Views", "Accessors", "Meshes", "Materials"; embedded buffers as
+  ``data:application/octet-stream;base64`` URIs).
+* Khronos, *KHR_materials_specular* (``specularFactor``, ``specularColorFactor``) and
+  *KHR_materials_anisotropy* (``anisotropyStrength``, ``anisotropyRotation``; a mesh using
+  it MUST have ``NORMAL`` and ``TANGENT`` attributes).
+
+The parameters of :mod:`plausible.models.gltf_pbr` are the glTF factors themselves, so a
+material is written as it is, with no conversion: ``base_color`` -> ``baseColorFactor``
+(alpha 1), ``metallic`` -> ``metallicFactor``, ``roughness`` -> ``roughnessFactor``, and the
+extensions only where their values differ from the defaults (an extension at its default
+changes nothing; ``extensionsUsed`` lists what the file uses, none is required, so a viewer
+without them still shows the base material).
+
+The file: one buffer (positions, normals, tangents of one sphere of radius 1, and its
+triangle indices), shared by every mesh; one mesh and one node per material, named after
+it, in rows of ``ceil(sqrt(N))`` spheres 2.5 apart along ``+x`` and ``-y``.  A mesh
+has ``TANGENT`` where its material is anisotropic (the extension's tangent ``t`` is the
+direction of growing azimuth about ``+y``).
+
+>>> from plausible.export.gltf import gltf_document
+>>> doc = gltf_document({"gold": {"base_color": [1.0, 0.77, 0.34], "metallic": 1.0, "roughness": 0.3}})
+>>> doc["materials"][0]["pbrMetallicRoughness"]["metallicFactor"], doc["asset"]["version"]
+(1.0, '2.0')
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .. import registry
+
+__all__ = ["gltf_document", "gltf_material", "sphere", "write_gltf"]
+
+#: glTF's numbers for the types the file uses.
+_FLOAT, _UNSIGNED_SHORT = 5126, 5123
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_TRIANGLES = 4
+#: Distance between the centres of neighbouring spheres (radius 1).
+SPACING = 2.5
+
+
+def _model(name: str, params):
+    """``params`` as a validated ``gltf-pbr`` model (a model given is checked to be one)."""
+    cls = registry.info("gltf-pbr").cls
+    if isinstance(params, cls):
+        return params
+    if not isinstance(params, dict):
+        raise ValueError(f"material {name!r}: parameters must be a dict of gltf-pbr parameters or a "
+                         f"gltf-pbr model, got {type(params).__name__}")
+    try:
+        return cls(**params)
+    except ValueError as err:
+        raise ValueError(f"material {name!r}: {err}") from None
+
+
+def _rgb(v) -> list:
+    a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
+    return [float(x) for x in a]
+
+
+def gltf_material(name: str, params) -> dict:
+    """The glTF material object of one ``gltf-pbr`` material (``params``: a dict of its
+    parameters or the model); ValueError naming the material and the parameter for bad values."""
+    p = _model(name, params).params
+    mat = {"name": str(name),
+           "pbrMetallicRoughness": {"baseColorFactor": _rgb(p["base_color"]) + [1.0],
+                                    "metallicFactor": float(p["metallic"]),
+                                    "roughnessFactor": float(p["roughness"])}}
+    ext = {}
+    if p["specular"] != 1.0 or np.any(np.asarray(p["specular_color"]) != 1.0):
+        ext["KHR_materials_specular"] = {"specularFactor": float(p["specular"]),
+                                         "specularColorFactor": _rgb(p["specular_color"])}
+    if p["anisotropy_strength"] != 0.0:
+        ext["KHR_materials_anisotropy"] = {"anisotropyStrength": float(p["anisotropy_strength"]),
+                                           "anisotropyRotation": float(p["anisotropy_rotation"])}
+    if ext:
+        mat["extensions"] = ext
+    return mat
+
+
+def sphere(rings: int = 32, segments: int = 64):
+    """A UV sphere of radius 1 about the origin: ``(positions, normals, tangents, indices)``
+    as float32 ``(V, 3)``, ``(V, 3)``, ``(V, 4)`` and uint16 ``(T, 3)`` arrays.  Vertex
+    ``(i, j)`` at polar angle ``pi i / rings`` from ``+y`` (glTF's up) and azimuth
+    ``2 pi j / segments``; the seam column is doubled (``j = segments``).  The tangent
+    is the direction of growing azimuth, ``(cos phi, 0, -sin phi)``, with handedness
+    ``w = 1``; counter-clockwise triangles seen from outside (glTF's front faces)."""
+    if rings < 2 or segments < 3 or (rings + 1) * (segments + 1) > 65535:
+        raise ValueError(f"sphere: rings >= 2, segments >= 3 and (rings + 1)(segments + 1) <= 65535 "
+                         f"(16-bit indices), got rings={rings}, segments={segments}")
+    th = np.linspace(0.0, math.pi, rings + 1)[:, None]
+    ph = np.linspace(0.0, 2.0 * math.pi, segments + 1)[None, :]
+    st, ct, sp, cp = np.sin(th), np.cos(th), np.sin(ph), np.cos(ph)
+    pos = np.stack(np.broadcast_arrays(st * sp, ct, st * cp), -1).reshape(-1, 3)
+    tan = np.stack(np.broadcast_arrays(cp, 0.0 * th, -sp, 1.0 + 0.0 * th), -1).reshape(-1, 4)
+    i, j = np.meshgrid(np.arange(rings), np.arange(segments), indexing="ij")
+    a = i * (segments + 1) + j
+    b = a + segments + 1
+    quads = np.stack([a, b, a + 1, a + 1, b, b + 1], -1).reshape(-1, 3)
+    tris = quads[np.abs(np.cross(pos[quads[:, 1]] - pos[quads[:, 0]],
+                                 pos[quads[:, 2]] - pos[quads[:, 0]])).sum(-1) > 1e-12]
+    return pos.astype(np.float32), pos.astype(np.float32), tan.astype(np.float32), tris.astype(np.uint16)
+
+
+def _buffer(arrays):
+    """One buffer holding ``arrays`` (each 4-byte aligned), its views and accessors."""
+    blob, views, accessors = b"", [], []
+    for arr, kind, target in arrays:
+        data = np.ascontiguousarray(arr).tobytes()
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": target})
+        acc = {"bufferView": len(views) - 1, "componentType": _UNSIGNED_SHORT if arr.dtype == np.uint16 else _FLOAT,
+               "count": int(arr.size if kind == "SCALAR" else len(arr)), "type": kind}
+        if kind == "VEC3" and target == _ARRAY_BUFFER and len(accessors) == 0:   # POSITION needs min, max
+            acc["min"] = [float(x) for x in arr.min(0)]
+            acc["max"] = [float(x) for x in arr.max(0)]
+        accessors.append(acc)
+        blob += data + b"\0" * (-len(data) % 4)
+    uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode("ascii")
+    return {"byteLength": len(blob), "uri": uri}, views, accessors
+
+
+def gltf_document(materials: dict, *, rings: int = 32, segments: int = 64) -> dict:
+    """The glTF 2.0 JSON (a dict) of ``materials`` (name -> ``gltf-pbr`` parameters or
+    model), one sphere each (see the module docstring)."""
+    if not isinstance(materials, dict) or not materials:
+        raise ValueError(f"materials must be a non-empty dict of name -> gltf-pbr parameters, "
+                         f"got {type(materials).__name__} {materials!r:.60}")
+    mats = [gltf_material(name, params) for name, params in materials.items()]
+    pos, nrm, tan, idx = sphere(rings, segments)
+    buf, views, accessors = _buffer([(pos, "VEC3", _ARRAY_BUFFER), (nrm, "VEC3", _ARRAY_BUFFER),
+                                     (tan, "VEC4", _ARRAY_BUFFER), (idx, "SCALAR", _ELEMENT_ARRAY_BUFFER)])
+    def prim(m, k):
+        # TANGENT only where KHR_materials_anisotropy needs it (the validator reports it unused elsewhere)
+        att = {"POSITION": 0, "NORMAL": 1}
+        if "KHR_materials_anisotropy" in m.get("extensions", {}):
+            att["TANGENT"] = 2
+        return {"attributes": att, "indices": 3, "material": k, "mode": _TRIANGLES}
+
+    cols = math.ceil(math.sqrt(len(mats)))
+    nodes = [{"name": m["name"], "mesh": k,
+              "translation": [SPACING * (k % cols), -SPACING * (k // cols), 0.0]} for k, m in enumerate(mats)]
+    used = sorted({e for m in mats for e in m.get("extensions", {})})
+    doc = {"asset": {"version": "2.0", "generator": "plausible (gltf-pbr)"},
+           "scene": 0, "scenes": [{"nodes": list(range(len(mats)))}], "nodes": nodes,
+           "meshes": [{"name": m["name"], "primitives": [prim(m, k)]} for k, m in enumerate(mats)],
+           "materials": mats, "buffers": [buf], "bufferViews": views, "accessors": accessors}
+    if used:
+        doc["extensionsUsed"] = used
+    return doc
+
+
+def write_gltf(materials: dict, path, *, rings: int = 32, segments: int = 64) -> Path:
+    """Write ``materials`` (name -> ``gltf-pbr`` parameters or model) to ``path`` as a
+    ``.gltf`` file (JSON, buffers embedded); returns the path.  One sphere per material,
+    each node and mesh named after its material."""
+    path = Path(path)
+    doc = gltf_document(materials, rings=rings, segments=segments)
+    path.write_text(json.dumps(doc, indent=1) + "\n")
+    return path

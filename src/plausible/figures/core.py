@@ -1,0 +1,231 @@
+"""The figure registry: :class:`Figure` entries added by :func:`figure`, and the
+:class:`Context` a figure function draws into (the face is :mod:`plausible.figures`).
+
+The figure modules (:data:`MODULES`, in report order) import this one and
+register their figures; :func:`names` and :func:`get` import them by name on
+first use, as :mod:`plausible.registry` imports the models.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..progress import silent, start
+from ..text import jsonable
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One registered figure: ``name`` (file-safe), ``title``, ``source`` (paper and
+    figure number), ``caption`` (quoted from the paper), ``params`` (keyword
+    arguments of ``fn``, shown in the report) and the function."""
+
+    name: str
+    title: str
+    source: str
+    caption: str
+    fn: Callable
+    params: dict = field(default_factory=dict)
+    renders: bool = False
+    module: str = ""
+
+
+FIGURES: dict[str, Figure] = {}
+
+
+def figure(name: str, title: str, source: str, caption: str, renders: bool = False, **params):
+    """Decorator: register ``fn(ctx, **params)`` as figure ``name``."""
+
+    def deco(fn):
+        if name in FIGURES and FIGURES[name].fn.__qualname__ != fn.__qualname__:
+            raise ValueError(f"figure {name!r} registered twice")
+        FIGURES[name] = Figure(name, title, source, caption, fn, dict(params), renders, fn.__module__)
+        return fn
+
+    return deco
+
+
+#: The figure modules in report order (``materials``: issue 16, the published MERL fits).
+MODULES = ("paper_as", "paper_neumann", "paper_notes", "checks", "lobes", "materials")
+
+
+def _load():
+    for m in MODULES:
+        importlib.import_module(f"{__package__}.{m}")
+
+
+def names() -> list[str]:
+    _load()
+    return list(FIGURES)
+
+
+def get(name: str) -> Figure:
+    _load()
+    try:
+        return FIGURES[name]
+    except KeyError:
+        raise ValueError(f"unknown figure {name!r}; figures: {', '.join(FIGURES)}") from None
+
+
+#: Image size and samples per pixel of the default run, and of the quick (CI) run.
+DEFAULT_RESOLUTION, DEFAULT_SPP = 320, 128
+QUICK_RESOLUTION, QUICK_SPP = 48, 8
+
+
+class Context:
+    """What a figure function writes through.  ``res(scale)`` and ``spp(scale)``
+    give the image size / sample count for this run (``--resolution``, ``--spp``,
+    quick mode); the figure scales them for its own layout.  ``progress``: a
+    :mod:`plausible.progress` factory, announced by :meth:`steps`."""
+
+    def __init__(self, out: Path, *, resolution=None, spp=None, quick=False, progress=None):
+        self.out = Path(out)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.quick = quick
+        self.base_res = resolution or (QUICK_RESOLUTION if quick else DEFAULT_RESOLUTION)
+        self.base_spp = spp or (QUICK_SPP if quick else DEFAULT_SPP)
+        self._progress = progress
+        self._tick = silent(0)      # until steps() announces a total
+        self._total = self._done = 0
+        self.items: list[dict] = []      # images, plots, data files, in order
+        self.measurements: list[dict] = []
+        self.notes: list[str] = []
+
+    # -- sizes ------------------------------------------------------------------
+    def res(self, scale: float = 1.0, minimum: int = 8) -> int:
+        return max(minimum, int(round(self.base_res * scale / 2)) * 2)
+
+    def spp(self, scale: float = 1.0) -> int:
+        return max(1, int(round(self.base_spp * scale)))
+
+    # -- progress ---------------------------------------------------------------
+    def steps(self, total: int):
+        """Declare how many ``tick()`` calls this figure will make."""
+        self._tick = start(self._progress, total)
+        self._total, self._done = total, 0
+
+    def tick(self, n: int = 1):
+        """One step (or ``n``) of those declared by :meth:`steps` done."""
+        self._done += n
+        self._tick(n)
+
+    def finish(self):
+        """Count the steps the figure declared but did not tick (the runner calls it)."""
+        if self._done < self._total:
+            self.tick(self._total - self._done)
+
+    # -- outputs ----------------------------------------------------------------
+    def image(self, name: str, img, exposure: float = 1.0, caption: str = "", rerender=None) -> np.ndarray:
+        """A render: ``name.exr`` (linear) and ``name.png`` (sRGB), and a check that it
+        has no isolated hot pixel (:func:`plausible.figures.scenes.hot_pixels`: luminance
+        above 4 x its 3x3 median + 0.5; a reference image has none).
+
+        ``rerender(y0, x0, h, w)``, if given, renders the window ``[y0, y0 + h) x [x0,
+        x0 + w)`` of the same scene with another seed: a hot pixel that stands out from
+        its 3x3 median there by at least half as much again is a feature of the image
+        (a glint smaller than a pixel), not noise, and is not counted (the note says
+        how many)."""
+        from .scenes import HOT_FACTOR, HOT_OFFSET, count_hot_pixels, hot_pixels, luminance, median3, write_image
+
+        img = np.asarray(img, dtype=np.float64)
+        write_image(self.out / name, img, exposure)
+        self.items.append(dict(kind="image", png=f"{name}.png", exr=f"{name}.exr", caption=caption))
+        hot, iso = count_hot_pixels(img, isolated=False), hot_pixels(img)
+        steady = 0
+        if rerender is not None:
+            h, w = iso.shape
+            first = luminance(img) - median3(img)
+            for y, x in zip(*np.nonzero(iso)):
+                y0, x0 = max(0, min(y - 3, h - 7)), max(0, min(x - 3, w - 7))
+                crop = rerender(int(y0), int(x0), min(7, h), min(7, w))
+                excess = (luminance(crop) - median3(crop))[y - y0, x - x0]
+                steady += bool(excess >= 0.5 * first[y, x])   # a glint comes back; a firefly does not
+        n = int(iso.sum()) - steady
+        note = f"{hot} pixels pass the luminance test alone"
+        if hot > int(iso.sum()):
+            note += f", {hot - int(iso.sum())} of them with 2 or more neighbours as bright (the corners of a bright " \
+                    "area, not isolated)"
+        if steady:
+            note += f"; {steady} isolated one(s) as bright again (at least half the excess over the 3x3 median) in " \
+                    "a render of its neighbourhood with another seed: a glint smaller than a pixel, not noise; not " \
+                    "counted"
+        self.measure(f"{name}: isolated hot pixels (luminance > {HOT_FACTOR:g} x its 3x3 median + {HOT_OFFSET:g}, "
+                     "at most one neighbour as bright)", n, at_most=0, note=note)
+        return img
+
+    def plot(self, name: str, fig, caption: str = ""):
+        """A matplotlib figure -> ``name.png``."""
+        fig.savefig(self.out / f"{name}.png", dpi=110)
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+        self.items.append(dict(kind="plot", png=f"{name}.png", caption=caption))
+
+    def table(self, name: str, columns: dict, caption: str = ""):
+        """Plotted data as ``name.csv``: ``columns`` maps header -> 1-D array."""
+        keys = list(columns)
+        arr = np.column_stack([np.asarray(columns[k], dtype=np.float64).ravel() for k in keys])
+        np.savetxt(self.out / f"{name}.csv", arr, delimiter=",", header=",".join(keys), comments="",
+                   fmt="%.8g")
+        self.items.append(dict(kind="data", file=f"{name}.csv", caption=caption))
+
+    def json(self, name: str, obj, caption: str = ""):
+        (self.out / f"{name}.json").write_text(json.dumps(jsonable(obj), indent=1, default=str))
+        self.items.append(dict(kind="data", file=f"{name}.json", caption=caption))
+
+    def file(self, name: str, caption: str = ""):
+        """Register a file the figure wrote itself into ``ctx.out``."""
+        self.items.append(dict(kind="data", file=name, caption=caption))
+
+    def measure(self, quantity: str, measured, expected=None, tol=None, note: str = "", at_most=None,
+                at_least=None):
+        """A number measured on the figure.  It is a check when given
+
+        * ``expected`` and ``tol``: ``ok = |measured - expected| <= tol``;
+        * ``at_most`` and/or ``at_least``: ``ok = at_least <= measured <= at_most``;
+        * a boolean ``measured`` with a boolean ``expected``: ``ok = measured == expected``
+          (shown as yes / no).
+
+        Every value stored is a number (or a boolean); the report writes the bounds
+        as ``<= x`` / ``>= x`` in its "expected" column."""
+        if isinstance(measured, (bool, np.bool_)) or isinstance(expected, (bool, np.bool_)):
+            if not isinstance(expected, (bool, np.bool_, type(None))):
+                raise ValueError(f"measure({quantity!r}): a boolean is compared with a boolean, got {expected!r}")
+            m = dict(quantity=quantity, measured=bool(measured), expected=None if expected is None
+                     else bool(expected), tol=None, note=note)
+            if expected is not None:
+                m["ok"] = bool(measured) == bool(expected)
+            self.measurements.append(m)
+            return m
+        for k, v in (("expected", expected), ("tol", tol), ("at_most", at_most), ("at_least", at_least)):
+            if v is not None and not isinstance(v, (int, float, np.integer, np.floating)):
+                raise ValueError(f"measure({quantity!r}): '{k}' must be a number, got {v!r}")
+        m = dict(quantity=quantity, measured=_num(measured), expected=_num(expected), tol=_num(tol), note=note)
+        if expected is not None and tol is not None:
+            m["ok"] = bool(abs(float(measured) - float(expected)) <= float(tol))
+        if at_most is not None or at_least is not None:
+            m.update(at_most=_num(at_most), at_least=_num(at_least))
+            x = float(measured)
+            m["ok"] = bool((at_most is None or x <= float(at_most)) and (at_least is None or x >= float(at_least)))
+        self.measurements.append(m)
+        return m
+
+    def note(self, text: str):
+        self.notes.append(text)
+
+
+def _num(x):
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else str(x)
+
+
+__all__ = ["Context", "FIGURES", "Figure", "MODULES", "figure", "get", "names"]
