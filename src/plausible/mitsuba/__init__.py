@@ -100,6 +100,9 @@ def register(variant: str | None = None) -> list:
     from . import material
 
     out += material.register_plugin(classes)  # plausible_material (plausible.mitsuba.material)
+    from . import compensated
+
+    out += compensated.register_plugin(classes)  # plausible_compensated (plausible.mitsuba.compensated)
     return out
 
 
