@@ -52,6 +52,17 @@ def mc_albedo(model, wi, n=200_000, seed=1):
     return float(w.mean()), float(w.std() / math.sqrt(n))
 
 
+def mc_albedos(model, wi, n, seed):
+    """Monte Carlo albedo with the model's own sampler: (mean, standard error)
+    of the channel-mean weight, for each leading index of ``wi`` (k, 3)."""
+    wi = np.atleast_2d(wi)[:, None, :]
+    u = np.random.default_rng(seed).random((wi.shape[0], n, 3))
+    w = model.sample(wi, u).weight
+    if w.ndim == 3:
+        w = w.mean(axis=-1)
+    return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)
+
+
 def chi2_sampler_pvalue(model, wi, n=100_000, nmu=10, nphi=20, seed=7, sub=12):
     """Chi-square test of ``model.sample`` against ``model.pdf``.
 

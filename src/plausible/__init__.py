@@ -18,6 +18,7 @@ from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_
 from .backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
+from .conversion import convert  # (after fitting: it fits)
 from .catalogue import material, materials
 from .models.sum import Sum
 from .registry import info, make, names, register
@@ -25,6 +26,6 @@ from .vec import angles, direction
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "direction", "energy", "fit",
+__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "convert", "direction", "energy", "fit",
            "hemispherical_albedo", "info", "make", "material", "materials", "names", "reciprocity", "register",
            "sampling_consistency", "use_backend", "__version__"]

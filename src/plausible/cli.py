@@ -607,6 +607,48 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
             console.print(f"wrote {escape(str(p))}")
 
 
+@main.command("convert")
+@click.argument("source")
+@click.option("--to", "to", required=True, metavar="TARGET",
+              help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, "
+                   "principled), gltf, or a registered model.")
+@click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
+              help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
+                   "or .gltf (with --to gltf).")
+@click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
+              show_default=True, help="Error metric minimised (see docs/fitting.md).")
+@click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
+def convert_cmd(source, to, out, metric, as_json):
+    """Convert SOURCE's materials to TARGET, with the error measured (docs/convert.md).
+
+    SOURCE: a model spec, material:NAME@FIT, a Mitsuba BSDF (.xml, or .json of dicts by name),
+    or a Wavefront .mtl file.
+    """
+    from pathlib import Path
+
+    from .conversion import convert
+
+    if Path(out).suffix.lower() not in (".json", ".xml", ".gltf"):
+        _fail(f"--out must end in .json, .xml or .gltf, got {out!r}")
+    try:
+        res = convert(source, to=to, metric=metric)
+        path = res.write(out)
+    except ValueError as e:
+        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))
+    if as_json:
+        _echo_json(res.to_json())
+        return
+    t = Table()
+    for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "warnings"):
+        t.add_column(col)
+    for c in res.items:
+        diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo)
+        t.add_row(escape(c.name), escape(c.target), f"{c.errors['perceptual']:.3g}", diffs,
+                  escape("; ".join(c.warnings)) or "-")
+    console.print(t)
+    console.print(f"wrote {escape(str(path))}")
+
+
 @main.command("fit-batch")
 @click.argument("targets", nargs=-1, required=True)
 @click.option("--models", required=True, metavar="A,B,...", help="Models to fit (comma-separated registry names).")

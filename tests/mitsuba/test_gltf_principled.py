@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import random_upper
 
 from mi_helpers import mi  # noqa: F401  (sets the variant; skips without Mitsuba)
 
@@ -28,13 +29,6 @@ import plausible
 from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict
 
 RTOL = 1e-5
-
-
-def upper(rng, n, zmin=0.05):
-    z = rng.uniform(zmin, 1.0, n)
-    p = rng.uniform(0.0, 2 * np.pi, n)
-    s = np.sqrt(1 - z * z)
-    return np.stack([s * np.cos(p), s * np.sin(p), z], -1)
 
 
 def principled(base, roughness, anisotropic=0.0):
@@ -57,7 +51,7 @@ def test_a_metal_is_principled_where_one_direction_is_the_normal(roughness):
     rng = np.random.default_rng(1)
     g = plausible.make("gltf-pbr", base_color=BASE, metallic=1.0, roughness=roughness)
     m = principled(BASE, roughness)
-    wo = upper(rng, 2000)
+    wo = random_upper(rng, 2000, 0.05)
     n = np.tile([0.0, 0.0, 1.0], (len(wo), 1))
     np.testing.assert_allclose(m.eval(n, wo), g.eval(n, wo), rtol=RTOL)
     np.testing.assert_allclose(m.eval(wo, n), g.eval(wo, n), rtol=RTOL)
@@ -70,7 +64,7 @@ def test_a_metal_is_principled_up_to_the_masking_term(strength):
     g = plausible.make("gltf-pbr", base_color=BASE, metallic=1.0, roughness=r, anisotropy_strength=strength)
     at, ab = r * r + (1 - r * r) * strength ** 2, r * r
     m = principled(BASE, (at * ab) ** 0.25, (1 - ab / at) / 0.9)
-    wi, wo = upper(rng, 2000), upper(rng, 2000)
+    wi, wo = random_upper(rng, 2000, 0.05), random_upper(rng, 2000, 0.05)
     ratio = separable_over_correlated(wi, wo, at, ab)[:, None]
     np.testing.assert_allclose(m.eval(wi, wo), g.eval(wi, wo) * ratio, rtol=RTOL)
     assert np.max(np.abs(ratio - 1)) > 0.1        # the masking terms do differ
@@ -78,7 +72,7 @@ def test_a_metal_is_principled_up_to_the_masking_term(strength):
 
 def test_the_comparison_tells_a_one_percent_roughness_apart():
     rng = np.random.default_rng(3)
-    wo = upper(rng, 500)
+    wo = random_upper(rng, 500, 0.05)
     n = np.tile([0.0, 0.0, 1.0], (len(wo), 1))
     got = principled(BASE, 0.505).eval(n, wo)
     want = plausible.make("gltf-pbr", base_color=BASE, metallic=1.0, roughness=0.5).eval(n, wo)
@@ -93,6 +87,6 @@ def test_the_plugin_reduces_an_rgb_specular_color_as_numpy_does():
     d = {"type": "gltf_pbr", **{k: ({"type": "rgb", "value": v} if isinstance(v, list) else v)
                                 for k, v in kw.items()}}
     rng = np.random.default_rng(4)
-    wi, wo = upper(rng, 1000), upper(rng, 1000)
+    wi, wo = random_upper(rng, 1000, 0.05), random_upper(rng, 1000, 0.05)
     np.testing.assert_allclose(MitsubaBSDF(load_bsdf_dict(d)).eval(wi, wo),
                                plausible.make("gltf-pbr", **kw).eval(wi, wo), rtol=RTOL)

@@ -45,6 +45,7 @@ import numpy as np
 
 from ..bxdf import Sample
 from ..directions import CHUNK, as_directions, as_unit_interval
+from ..text import shorten
 from ..vec import HORIZON
 
 __all__ = ["CallableBxDF", "as_bxdf", "load_python", "tolerances"]
@@ -95,7 +96,7 @@ def as_bxdf(x):
     if callable(x) or callable(getattr(x, "eval", None)):
         return CallableBxDF(x)
     raise TypeError(f"model must be a registered model, a model spec string, a mitsuba.BSDF, or a callable "
-                    f"f(wi, wo) (optionally with pdf and sample); got {type(x).__name__}: {_short_repr(x)}")
+                    f"f(wi, wo) (optionally with pdf and sample); got {type(x).__name__}: {shorten(repr(x))}")
 
 
 def _is_contract(x) -> bool:
@@ -117,11 +118,6 @@ def _is_mitsuba_bsdf(x) -> bool:
         return isinstance(x, mi.BSDF)
     except (AttributeError, ImportError):   # no variant set: mi.BSDF does not exist yet
         return False
-
-
-def _short_repr(x, n=60):
-    r = repr(x)
-    return r if len(r) <= n else r[:n - 3] + "..."
 
 
 def load_python(target: str):
