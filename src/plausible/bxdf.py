@@ -268,6 +268,14 @@ class BxDF:
         (:func:`plausible.kernel_params.default_structure`)."""
         return kernel_params.default_structure(self)
 
+    @property
+    def reciprocal(self) -> bool:
+        """Whether the model claims ``f(wi, wo) = f(wo, wi)``: the one place to ask.
+        Its registry entry's claim (``register(reciprocal=...)``); a model outside the
+        registry (a variant in :mod:`plausible.models.published`, a
+        :class:`~plausible.models.sum.Sum`) states its own by overriding this."""
+        return bool(self.info.reciprocal) if self.info is not None else False
+
     # -- the NumPy contract --------------------------------------------------------
     @property
     def name(self) -> str:

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .text import shorten
+
 #: Largest number of direction pairs evaluated in one NumPy pass; bigger batches
 #: are processed in chunks so memory stays bounded.
 CHUNK = 1 << 20
@@ -25,16 +27,10 @@ def as_array(name: str, w) -> np.ndarray:
     try:
         a = np.asarray(w, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a float array of shape (..., 3), got {_short(w)}") from None
+        raise ValueError(f"{name} must be a float array of shape (..., 3), got {shorten(repr(w))}") from None
     if a.ndim == 0 or a.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3), got {a.shape}")
     return a
-
-
-def _short(v) -> str:
-    """``repr(v)``, cut to 60 characters (for error messages)."""
-    r = repr(v)
-    return r if len(r) <= 60 else r[:57] + "..."
 
 
 def _blocks(a: np.ndarray):

@@ -156,11 +156,12 @@ def _sums(model, kind, rules, requests):
 
 
 def _jit_sums(model, kind, rules, requests, grids):
-    """:func:`plausible.backend.grid_sums`, one launch per rule ``(m, refine)`` (so
-    that the padding to a common grid size stays small)."""
+    """:func:`plausible.backend.grid_sums`, one launch per group of grids of about the
+    same size (:func:`_pad_groups`: the padding to a common size adds at most
+    :data:`PAD_WASTE` - 1 of the nodes; a grazing incidence's grid can be many times
+    the size of a normal one's)."""
     res = [None] * len(requests)
-    for key in sorted({(m, r) for _, m, r in requests}):
-        idx = [k for k, (_, m, r) in enumerate(requests) if (m, r) == key]
+    for idx in _pad_groups([(len(g[0]), len(g[2])) for g in grids]):
         wis = np.array([rules[requests[k][0]].wi for k in idx])
         cols = [_pad([grids[k][c] for k in idx]) for c in range(6)]
         for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
