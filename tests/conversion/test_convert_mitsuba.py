@@ -181,3 +181,20 @@ def test_a_gltf_source_converted_to_gltf_gives_back_its_parameters(tmp_path):
     (mat,) = doc["materials"]
     assert mat["name"] == "gltf-pbr"
     assert mat["pbrMetallicRoughness"]["baseColorFactor"][:3] == pytest.approx(c.params["base_color"])
+
+
+@pytest.mark.slow
+def test_the_gltf_file_of_an_mtl_conversion_passes_the_khronos_validator(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "gltf_validator", Path(__file__).resolve().parents[1] / "export" / "gltf_validator.py")
+    gv = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gv)
+    gv.require()
+    (tmp_path / "lib.mtl").write_text(DIFFUSE_MTL + "newmtl matte grey\nKd 0.4 0.4 0.4\nillum 1\n")
+    path = convert(str(tmp_path / "lib.mtl"), to="gltf").write(tmp_path / "out.gltf")
+    issues = gv.validate(path)["issues"]
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
+    assert [m["name"] for m in json.loads(path.read_text())["materials"]] == ["plasticky", "matte grey"]
