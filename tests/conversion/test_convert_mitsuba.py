@@ -13,7 +13,7 @@ mi = pytest.importorskip("mitsuba")
 pytest.importorskip("drjit")
 
 import plausible  # noqa: E402
-from plausible.analysis.mitsuba_bsdf import ensure_variant, load_bsdf_xml  # noqa: E402
+from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, ensure_variant, load_bsdf_xml  # noqa: E402
 from plausible.conversion import TOLERANCE, albedo_check, convert, read_sources  # noqa: E402
 from plausible.conversion import mitsuba as CM  # noqa: E402
 
@@ -69,11 +69,16 @@ def test_converted_bsdfs_load_and_keep_the_albedo_of_conserving_sources(tmp_path
         source = str(tmp_path / "lib.mtl")
     res = convert(source, to="mitsuba")
     out = res.write(tmp_path / "out.json")
+    xml = res.write(tmp_path / "out.xml")
+    wi, wo = plausible.direction([0.2, 0.7, 1.2], 0.3), plausible.direction([0.5, 0.1, 1.0], 2.0)
     for item, (name, d) in zip(res.items, json.loads(out.read_text()).items()):
         assert isinstance(mi.load_dict(d), mi.BSDF)
         ok, diff = albedo_check(read_sources(source)[0].model, d)
         assert ok, (name, diff)
         assert not item.warnings
+        # the XML fragment is the same BSDF (9 significant digits of the colours)
+        from_xml, from_json = MitsubaBSDF(load_bsdf_xml(str(xml), name)), MitsubaBSDF(mi.load_dict(d))
+        assert np.allclose(from_xml.eval(wi, wo), from_json.eval(wi, wo), rtol=1e-6)
 
 
 def test_the_rule_of_thumb_and_a_perturbed_result_fail_the_same_check(tmp_path):
@@ -107,8 +112,6 @@ def test_the_xml_fragment_loads_each_bsdf_by_its_id(tmp_path):
                   to="mitsuba:diffuse")
     path = res.write(tmp_path / "out.xml")
     b = load_bsdf_xml(str(path), "paint")
-    from plausible.analysis.mitsuba_bsdf import MitsubaBSDF
-
     assert np.allclose(MitsubaBSDF(b).eval([0, 0, 1], [0.6, 0, 0.8]) * np.pi, [0.2, 0.5, 0.7], atol=1e-5)
 
 
