@@ -56,7 +56,7 @@ def models_of(kind, base):
 
 
 @figure("compensation", "Energy compensation of any BSDF: pumping-up and Kulla-Conty",
-        "Neumann, Neumann, Szirmay-Kalos 1999, eq. 16, 20; Kulla, Conty 2017 (SIGGRAPH course)",
+        "plausible (issue 31); Neumann, Neumann, Szirmay-Kalos 1999, eq. 16, 20; Kulla, Conty 2017 (SIGGRAPH course)",
         "GGX roughconductor (Mitsuba, through the adapter) and Cook-Torrance (Beckmann, V-groove G), Fresnel 1: "
         "albedo against incidence and white-furnace spheres over roughness for the base, pumped up once and "
         "Kulla-Conty's multiple-scattering lobe added; reciprocity measured for each, and for the non-reciprocal "
