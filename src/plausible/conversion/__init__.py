@@ -36,7 +36,6 @@ import math
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -399,6 +398,13 @@ def mitsuba_xml(dicts: dict) -> str:
         lines += _xml_element("bsdf", d, f" id={quoteattr(name)}", "    ")
     lines.append("</scene>")
     return "\n".join(lines) + "\n"
+
+
+def quoteattr(text) -> str:
+    """``text`` as a double-quoted XML attribute value (``xml.sax.saxutils.quoteattr``'s escapes
+    without its import, which pulls in ``urllib.request``: 78 ms at ``import plausible``)."""
+    t = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+    return '"' + t.replace("\n", "&#10;").replace("\r", "&#13;").replace("\t", "&#9;") + '"'
 
 
 def _xml_element(tag, d, attrs, pad):
