@@ -392,17 +392,26 @@ def albedo_check(source_model, bsdf_dict: dict, tolerance: float = TOLERANCE):
 
 def mitsuba_xml(dicts: dict) -> str:
     """A Mitsuba 3 scene fragment: one ``<bsdf type=... id=NAME>`` per dict (floats,
-    ``<rgb>``, ``<boolean>``, ``<string>``, a ``bitmap`` as a nested ``<texture>``)."""
+    ``<rgb>``, ``<boolean>``, ``<string>``, a ``bitmap`` as a nested ``<texture>``, a
+    nested BSDF, ``blendbsdf``'s ``bsdf_0``/``bsdf_1``, as a nested ``<bsdf>``)."""
     lines = ['<scene version="3.0.0">']
     for name, d in dicts.items():
-        lines.append(f'    <bsdf type={quoteattr(d["type"])} id={quoteattr(name)}>')
-        for k, v in d.items():
-            if k == "type":
-                continue
-            lines.append("        " + _xml_value(k, v))
-        lines.append("    </bsdf>")
+        lines += _xml_element("bsdf", d, f" id={quoteattr(name)}", "    ")
     lines.append("</scene>")
     return "\n".join(lines) + "\n"
+
+
+def _xml_element(tag, d, attrs, pad):
+    out = [f"{pad}<{tag} type={quoteattr(d['type'])}{attrs}>"]
+    for k, v in d.items():
+        if k == "type":
+            continue
+        if isinstance(v, dict) and v.get("type") not in ("rgb", "bitmap"):
+            out += _xml_element("bsdf", v, f" name={quoteattr(k)}", pad + "    ")
+        else:
+            out.append(pad + "    " + _xml_value(k, v))
+    out.append(f"{pad}</{tag}>")
+    return out
 
 
 def _xml_value(k, v):
