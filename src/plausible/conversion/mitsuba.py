@@ -14,7 +14,9 @@ with ``B_0`` Mitsuba's value with every slot 0 (zero unless the family has an
 ``nonlinear = false``: the diffuse term is ``diffuse_reflectance / (1 - fdr)``
 times factors free of it, the coat ``specular_reflectance`` times its lobe;
 ``principled``: ``base_color`` enters the diffuse term and the metallic Schlick
-Fresnel linearly; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
+Fresnel linearly; ``blendbsdf``: ``(1 - weight)`` times a ``diffuse`` plus ``weight``
+times a ``roughconductor``, each linear in its colour; ``gltf-pbr``: see
+:data:`PLAUSIBLE_TYPES`; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
 on Mitsuba at random colours, and that it fails for ``nonlinear = true``).
 So the fit needs Mitsuba only per axis point: the bases are Mitsuba's values
 (:class:`~plausible.analysis.mitsuba_bsdf.MitsubaBSDF`, one launch over the
