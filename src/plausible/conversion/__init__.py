@@ -301,8 +301,8 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     notes = list(src.notes)
     if family is None:
         families, why = CM.candidates(src.model, src_alb[0])
-        probe = CM.Probe([src.model.peak_directions, CM._mirror])
-        target = CM._target(src.model, probe)
+        probe = CM.probe_for(src.model)
+        target = CM.source_target(src.model, probe)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
         family = r.family
