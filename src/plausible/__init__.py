@@ -15,7 +15,7 @@ floors are drawn in ``docs/index.md`` ("Structure").
 
 from .analysis import (albedo, albedo_curve, check, chi2, compensate, energy, hemispherical_albedo, reciprocity,
                        sampling_consistency)
-from .backend import use as use_backend
+from .arrays.backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
 from .conversion import convert  # (after fitting: it fits)

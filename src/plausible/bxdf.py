@@ -47,10 +47,10 @@ from typing import Callable, ClassVar, NamedTuple
 
 import numpy as np
 
-from . import backend as _backend
+from .arrays import backend as _backend
 from . import directions as D
 from . import kernel_params, vec
-from .ops import NP
+from .arrays.ops import NP
 from .params import Param, spec_value
 from .text import fmt
 from .vec import HORIZON

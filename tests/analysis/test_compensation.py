@@ -21,7 +21,7 @@ from plausible.analysis import albedo, albedo_curve, direction
 from plausible.analysis import compensation as comp
 from plausible.models import kulla_conty as kcm
 from plausible.analysis.adapters import CallableBxDF
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 from reference import chi2_sampler_pvalue, mc_albedo
 
 #: Bases that lose energy with Fresnel = 1: Cook-Torrance (Beckmann, V-groove G) loses 13 % at

@@ -201,3 +201,13 @@ def test_the_gltf_file_of_an_mtl_conversion_passes_the_khronos_validator(tmp_pat
     issues = gv.validate(path)["issues"]
     assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
     assert [m["name"] for m in json.loads(path.read_text())["materials"]] == ["plasticky", "matte grey"]
+
+
+def test_the_command_names_the_bad_statement_of_an_mtl_file(tmp_path):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    (tmp_path / "bad.mtl").write_text("newmtl m\nNs -3\n")
+    r = CliRunner().invoke(main, ["convert", str(tmp_path / "bad.mtl"), "--to", "mitsuba", "--out", "x.json"])
+    assert r.exit_code == 2 and "bad.mtl:2 (material 'm'): Ns must be one number in [0, 1e+06]" in r.output

@@ -27,13 +27,13 @@ import itertools
 
 import numpy as np
 
-from .. import backend as _backend
+from ..arrays import backend as _backend
 from ..bxdf import BxDF
 from ..directions import split
 from ..integrals.cache import albedo_table_of
 from ..models.kulla_conty import FRESNEL_PARAMS, KullaConty
 from ..models.pumped_up import ModelParam, PumpedUp
-from ..ops import NP
+from ..arrays.ops import NP
 from ..vec import above
 
 #: The operators of :func:`compensate` (the last one the non-reciprocal reference).

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import backend as _backend
+from ..arrays import backend as _backend
 from ..bxdf import BxDF
 from ..directions import as_directions
 from ..progress import start

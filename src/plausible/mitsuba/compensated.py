@@ -65,7 +65,7 @@ def build_model(mi, nested, method: str, times: int = 1, correction: str = "max"
 
 def _operator_methods(mi, dr) -> dict:
     """The plugin's own methods: the NumPy model's factors at ``(si.wi, wo)`` on Dr.Jit."""
-    from ..ops import INV_PI, drjit_ops
+    from ..arrays.ops import INV_PI, drjit_ops
 
     def __init__(self, props):
         mi.BSDF.__init__(self, props)

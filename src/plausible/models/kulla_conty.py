@@ -45,7 +45,7 @@ from .. import fresnel, vec, warps
 from ..bxdf import BxDF
 from ..integrals.albedo import hemispherical_albedo
 from ..integrals.cache import albedo_table_of, horizon_albedos
-from ..ops import INV_PI, NP
+from ..arrays.ops import INV_PI, NP
 from ..params import Param
 from ..registry import register
 from ..tables import AngleTable
