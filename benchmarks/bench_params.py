@@ -57,7 +57,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 import plausible  # noqa: E402
-from plausible import backend  # noqa: E402
+from plausible.arrays import backend  # noqa: E402
 
 needs_drjit = pytest.mark.skipif(not backend.drjit_available(), reason="Dr.Jit LLVM backend unavailable")
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import special, stats
 
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 TWO_PI = 2.0 * math.pi
 
@@ -185,7 +185,7 @@ def hooks_agree(model, wi, wo, u, *, rtol=1e-12, atol=1e-300, rtol_sample=1e-9, 
         pytest.skip(f"Dr.Jit LLVM backend unavailable: {e}")
     from types import SimpleNamespace
 
-    from plausible.ops import drjit_ops
+    from plausible.arrays.ops import drjit_ops
 
     ops = drjit_ops(Float64)
     n = len(wi)

@@ -13,9 +13,9 @@ floors are drawn in ``docs/index.md`` ("Structure").
 1.11408
 """
 
-from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_albedo, reciprocity,
+from .analysis import (albedo, albedo_curve, check, chi2, compensate, energy, hemispherical_albedo, reciprocity,
                        sampling_consistency)
-from .backend import use as use_backend
+from .arrays.backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
 from .conversion import convert  # (after fitting: it fits)
@@ -26,6 +26,6 @@ from .vec import angles, direction
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "convert", "direction", "energy", "fit",
+__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "compensate", "convert", "direction", "energy", "fit",
            "hemispherical_albedo", "info", "make", "material", "materials", "names", "reciprocity", "register",
            "sampling_consistency", "use_backend", "__version__"]

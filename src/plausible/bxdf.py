@@ -47,10 +47,10 @@ from typing import Callable, ClassVar, NamedTuple
 
 import numpy as np
 
-from . import backend as _backend
+from .arrays import backend as _backend
 from . import directions as D
 from . import kernel_params, vec
-from .ops import NP
+from .arrays.ops import NP
 from .params import Param, spec_value
 from .text import fmt
 from .vec import HORIZON
@@ -267,6 +267,14 @@ class BxDF:
         """What the traced kernel depends on besides data
         (:func:`plausible.kernel_params.default_structure`)."""
         return kernel_params.default_structure(self)
+
+    @property
+    def reciprocal(self) -> bool:
+        """Whether the model claims ``f(wi, wo) = f(wo, wi)``: the one place to ask.
+        Its registry entry's claim (``register(reciprocal=...)``); a model outside the
+        registry (a variant in :mod:`plausible.models.published`, a
+        :class:`~plausible.models.sum.Sum`) states its own by overriding this."""
+        return bool(self.info.reciprocal) if self.info is not None else False
 
     # -- the NumPy contract --------------------------------------------------------
     @property

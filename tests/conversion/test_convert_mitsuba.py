@@ -13,7 +13,7 @@ mi = pytest.importorskip("mitsuba")
 pytest.importorskip("drjit")
 
 import plausible  # noqa: E402
-from plausible.analysis.mitsuba_bsdf import ensure_variant, load_bsdf_xml  # noqa: E402
+from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, ensure_variant, load_bsdf_xml  # noqa: E402
 from plausible.conversion import TOLERANCE, albedo_check, convert, read_sources  # noqa: E402
 from plausible.conversion import mitsuba as CM  # noqa: E402
 
@@ -69,11 +69,16 @@ def test_converted_bsdfs_load_and_keep_the_albedo_of_conserving_sources(tmp_path
         source = str(tmp_path / "lib.mtl")
     res = convert(source, to="mitsuba")
     out = res.write(tmp_path / "out.json")
+    xml = res.write(tmp_path / "out.xml")
+    wi, wo = plausible.direction([0.2, 0.7, 1.2], 0.3), plausible.direction([0.5, 0.1, 1.0], 2.0)
     for item, (name, d) in zip(res.items, json.loads(out.read_text()).items()):
         assert isinstance(mi.load_dict(d), mi.BSDF)
         ok, diff = albedo_check(read_sources(source)[0].model, d)
         assert ok, (name, diff)
         assert not item.warnings
+        # the XML fragment is the same BSDF (9 significant digits of the colours)
+        from_xml, from_json = MitsubaBSDF(load_bsdf_xml(str(xml), name)), MitsubaBSDF(mi.load_dict(d))
+        assert np.allclose(from_xml.eval(wi, wo), from_json.eval(wi, wo), rtol=1e-6)
 
 
 def test_the_rule_of_thumb_and_a_perturbed_result_fail_the_same_check(tmp_path):
@@ -107,8 +112,6 @@ def test_the_xml_fragment_loads_each_bsdf_by_its_id(tmp_path):
                   to="mitsuba:diffuse")
     path = res.write(tmp_path / "out.xml")
     b = load_bsdf_xml(str(path), "paint")
-    from plausible.analysis.mitsuba_bsdf import MitsubaBSDF
-
     assert np.allclose(MitsubaBSDF(b).eval([0, 0, 1], [0.6, 0, 0.8]) * np.pi, [0.2, 0.5, 0.7], atol=1e-5)
 
 
@@ -181,3 +184,30 @@ def test_a_gltf_source_converted_to_gltf_gives_back_its_parameters(tmp_path):
     (mat,) = doc["materials"]
     assert mat["name"] == "gltf-pbr"
     assert mat["pbrMetallicRoughness"]["baseColorFactor"][:3] == pytest.approx(c.params["base_color"])
+
+
+@pytest.mark.slow
+def test_the_gltf_file_of_an_mtl_conversion_passes_the_khronos_validator(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "gltf_validator", Path(__file__).resolve().parents[1] / "export" / "gltf_validator.py")
+    gv = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gv)
+    gv.require()
+    (tmp_path / "lib.mtl").write_text(DIFFUSE_MTL + "newmtl matte grey\nKd 0.4 0.4 0.4\nillum 1\n")
+    path = convert(str(tmp_path / "lib.mtl"), to="gltf").write(tmp_path / "out.gltf")
+    issues = gv.validate(path)["issues"]
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
+    assert [m["name"] for m in json.loads(path.read_text())["materials"]] == ["plasticky", "matte grey"]
+
+
+def test_the_command_names_the_bad_statement_of_an_mtl_file(tmp_path):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    (tmp_path / "bad.mtl").write_text("newmtl m\nNs -3\n")
+    r = CliRunner().invoke(main, ["convert", str(tmp_path / "bad.mtl"), "--to", "mitsuba", "--out", "x.json"])
+    assert r.exit_code == 2 and "bad.mtl:2 (material 'm'): Ns must be one number in [0, 1e+06]" in r.output

@@ -28,7 +28,7 @@ from plausible.models.ashikhmin_shirley import (
     half_vector_density,
     half_vector_exponent,
 )
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 SQRT_HALF = math.sqrt(0.5)
 

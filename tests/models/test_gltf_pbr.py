@@ -13,7 +13,7 @@ from reference import (check_drjit, check_reciprocal, check_sampling, chi2_sampl
 
 import plausible
 from plausible import warps
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 def gltf(**kw):
@@ -223,7 +223,7 @@ def test_bad_parameters_are_named_with_their_range(kw, text):
 def test_the_shader_trace_takes_max_value_over_the_uniform_channels():
     # exported with uniforms, specular_color is a vec3 the shader reduces itself: the trace must
     # equal NumPy for a colour whose largest channel is not the first
-    from plausible import symbolic
+    from plausible.arrays import symbolic
     from plausible.export.shader import _symbolic_params, uniform_params
 
     m = gltf(base_color=[0.9, 0.5, 0.2], specular=0.7, specular_color=[0.5, 3.0, 1.0], roughness=0.4)

@@ -58,7 +58,7 @@ import numpy as np
 
 from ..bxdf import Sample
 from ..directions import CHUNK, as_array, check_directions
-from ..mitsuba import VARIANTS, ensure_variant
+from ..mitsuba.variant import VARIANTS, ensure_variant
 from ..vec import HORIZON
 from .foreign import ForeignBxDF
 

@@ -444,7 +444,7 @@ PLASTIC_SPECULAR = 0.04
 def diffuse_albedo(model) -> np.ndarray:
     """The albedo at normal incidence of the lobes ``model`` declares diffuse (three
     channels; 0 for a model that declares none or a foreign object)."""
-    from ..ops import NP
+    from ..arrays.ops import NP
 
     total = np.zeros(3)
     for lobe in getattr(model, "components", lambda: ())():

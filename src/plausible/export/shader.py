@@ -12,10 +12,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .. import symbolic
+from ..arrays import symbolic
 from ..bxdf import BxDF
 from ..text import fmt
-from ..symbolic import SYM
+from ..arrays.symbolic import SYM
 from .glsl import P, Emitter, channels3, helpers, literal
 
 __all__ = ["GLSLShader", "RESERVED", "UNIFORM_KINDS", "Uniform", "check_prefix", "to_glsl", "to_js", "uniform_params"]

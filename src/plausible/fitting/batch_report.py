@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import registry, vec
-from ..ops import NP
+from ..arrays.ops import NP
 from ..plotting import _plt
 from .batch import ERROR_KEYS, load_results
 

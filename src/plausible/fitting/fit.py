@@ -306,7 +306,7 @@ class _Values:
     agree to the backends' tolerance (``tests/fitting/test_fit.py``)."""
 
     def __init__(self, tgt: Target, fast: _FastAlbedo | None):
-        from .. import backend
+        from ..arrays import backend
         from ..directions import as_directions
 
         self.tgt, self.fast = tgt, fast

@@ -103,7 +103,7 @@ def array_safe(mi, model, name: str) -> bool:
     parameter is sampled with its texture's mean (still unbiased: ``pdf`` and
     ``sample`` use the same ``q``).  Checked with a dry run on two-element arrays.
     """
-    from ..ops import drjit_ops
+    from ..arrays.ops import drjit_ops
 
     if not _dr().is_array_v(mi.Float):
         return False  # a scalar variant: one value per call, never an array
@@ -431,7 +431,7 @@ def _dr():
 def _lobe_methods(mi, dr):
     """The plugin's direction bookkeeping over the model's lobes (a ``mi.BSDF``
     subclass of the current variant; :func:`make_plugin_class` derives from it)."""
-    from ..ops import drjit_ops
+    from ..arrays.ops import drjit_ops
 
     class PlausibleLobes(mi.BSDF):
         # -- direction bookkeeping ---------------------------------------------------
@@ -471,7 +471,7 @@ def _lobe_methods(mi, dr):
 def _interface_methods(mi, dr, base):
     """Mitsuba's BSDF interface (``eval``, ``pdf``, ``sample``, the diffuse
     reflectance) on the bookkeeping of ``base`` (:func:`_lobe_methods`)."""
-    from ..ops import drjit_ops
+    from ..arrays.ops import drjit_ops
 
     class PlausibleInterface(base):
         # -- the BSDF interface ------------------------------------------------------

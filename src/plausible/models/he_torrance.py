@@ -58,7 +58,7 @@ import numpy as np
 
 from .. import fresnel, special, vec, warps
 from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
-from ..ops import INV_PI, PI
+from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
 from ..vec import above
@@ -442,7 +442,7 @@ class HeTorrance(BxDF):
 
 
 def _np_ops():
-    from ..ops import NP
+    from ..arrays.ops import NP
 
     return NP
 

@@ -191,7 +191,7 @@ class MerlBRDF(BxDF):
         every half vector has ``h_y = 0`` and an anisotropic model's
         ``alpha_y`` is traded freely against its scale.)"""
         from ..directions import as_directions, split
-        from ..ops import NP
+        from ..arrays.ops import NP
 
         a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))
         with np.errstate(all="ignore"):
@@ -206,7 +206,7 @@ class MerlBRDF(BxDF):
     def missing(self, wi, wo) -> np.ndarray:
         """Boolean mask: the pair falls in a cell without a measurement."""
         from ..directions import as_directions, split
-        from ..ops import NP
+        from ..arrays.ops import NP
 
         a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))
         with np.errstate(all="ignore"):

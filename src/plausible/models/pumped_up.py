@@ -191,6 +191,7 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
+        self.disk_cache = getattr(base, "disk_cache", True)   # a base known only in this process
         if self.params["times"] > 0:
             check_bounded_albedo(base, progress=progress)
         self.tables = []
