@@ -213,6 +213,13 @@ def test_a_divergent_base_is_refused_by_both_operators():
             plausible.compensate("cook-torrance:m=0.3:geometry=none:fresnel=none", method)
 
 
+def test_a_non_reciprocal_base_is_refused_with_the_operators_reason():
+    with pytest.raises(ValueError, match="KullaConty: parameter 'base'.*'phong' is not reciprocal; Kulla-Conty"):
+        plausible.compensate("phong:n=20", "kulla-conty")
+    with pytest.raises(ValueError, match="PumpedUp: parameter 'base'.*not reciprocal; pumping-up needs"):
+        plausible.compensate("phong:n=20", "pumping-up")
+
+
 def test_bad_method_is_refused_with_the_allowed_names():
     with pytest.raises(ValueError, match="parameter 'method' must be one of pumping-up, kulla-conty"):
         plausible.compensate(CT, "energy")
