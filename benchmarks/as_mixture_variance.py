@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from plausible.models.ashikhmin_shirley import AshikhminShirley, specular_probability
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 class HalfMixture(AshikhminShirley):

@@ -123,7 +123,7 @@ def test_first_call(benchmark):
     """First and second call in a fresh process, with Dr.Jit's on-disk kernel
     cache empty (a new ``HOME``) and then filled by that first process: tracing
     + LLVM compilation, then a cache load, then a warm call."""
-    from plausible import backend
+    from plausible.arrays import backend
 
     if not backend.drjit_available():
         pytest.skip("Dr.Jit LLVM backend unavailable")

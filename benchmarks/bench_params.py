@@ -57,7 +57,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 import plausible  # noqa: E402
-from plausible import backend  # noqa: E402
+from plausible.arrays import backend  # noqa: E402
 
 needs_drjit = pytest.mark.skipif(not backend.drjit_available(), reason="Dr.Jit LLVM backend unavailable")
 
@@ -194,4 +194,48 @@ def test_check_command(benchmark, args):
     n = len(json.loads(r.stdout)) if r.stdout.strip().startswith("[") else -1
     record(benchmark, "issue-30", "plausible check " + " ".join(a for a in args if a != "--json"), backend="auto",
            op="check", n=n, wall_s=wall, cpu_s=cpus, status=r.returncode, load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+@pytest.mark.parametrize("jobs", [2, 1])
+def test_check_all_quick_jobs(benchmark, jobs):
+    """``plausible check --all --quick --jobs N`` (target 20 s): two worker
+    processes against one (the reference, same run), each a fresh process."""
+    r, wall, cpus = timed(lambda: _cli("check", "--all", "--quick", "--json", "--jobs", str(jobs)))
+    import json
+
+    n = len(json.loads(r.stdout)) if r.stdout.strip().startswith("[") else -1
+    record(benchmark, "issue-30", f"plausible check --all --quick --jobs {jobs}", backend="auto", op="check", n=n,
+           wall_s=wall, cpu_s=cpus, status=r.returncode, load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+@needs_drjit
+def test_explorer_slider(benchmark):
+    """The explorer's answer to a slider move: ``views.verdict`` (``check(quick=True)``)
+    and ``views.albedo`` (19 incidences) of a parameter set not seen before, after
+    one of each at other values (targets 0.5 s and 0.2 s)."""
+    from plausible.explorer import views
+
+    views.verdict(views.build("ashikhmin-shirley", {"nu": 10, "nv": 100}))
+    views.albedo(views.build("ashikhmin-shirley", {"nu": 10, "nv": 100}))
+    off = (time.time_ns() % 10 ** 6) * 1e-7
+    m = views.build("ashikhmin-shirley", {"nu": 14 + off, "nv": 80 - off})
+    _, wall_v, cpu_v = timed(lambda: views.verdict(m))
+    _, wall_a, cpu_a = timed(lambda: views.albedo(m))
+    record(benchmark, "issue-30", "explorer slider: verdict / albedo (ashikhmin-shirley)", backend="auto",
+           op="explorer", n=1, verdict_wall_s=wall_v, verdict_cpu_s=cpu_v, albedo_wall_s=wall_a,
+           albedo_cpu_s=cpu_a, load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+@pytest.mark.parametrize("jobs", [2, 1])
+def test_demo(benchmark, tmp_path, jobs):
+    """``make demo`` (``plausible figures --out DIR --jobs N`` in a fresh folder;
+    target 90 s, issue 25: at most 165 s): two worker processes against one
+    (the reference, same run).  Wall and CPU seconds, and the load."""
+    r, wall, cpus = timed(lambda: _cli("figures", "--out", str(tmp_path / "out"), "--jobs", str(jobs)))
+    last = (r.stdout.strip().splitlines() or [""])[-1]
+    record(benchmark, "issue-30", f"make demo (plausible figures --jobs {jobs})", backend="auto", op="figures",
+           n=1, wall_s=wall, cpu_s=cpus, status=r.returncode, summary=last[:200], load=load())
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)

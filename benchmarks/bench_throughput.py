@@ -59,7 +59,7 @@ def test_numpy(benchmark, pairs, name, op):
 def test_api_drjit(benchmark, pairs, name, op):
     """The NumPy-facing API on the Dr.Jit float64 backend (what ``auto`` picks for
     these batches when Dr.Jit is installed)."""
-    from plausible import backend
+    from plausible.arrays import backend
 
     if not backend.drjit_available():
         pytest.skip("Dr.Jit LLVM backend unavailable")
@@ -101,7 +101,7 @@ def dr_run(mi, outs):
 def test_drjit_hooks(benchmark, mi, pairs, name, op):
     import drjit as dr
 
-    from plausible.ops import drjit_ops
+    from plausible.arrays.ops import drjit_ops
 
     ops = drjit_ops(mi.Float)
     m = plausible.make(name)

@@ -31,8 +31,9 @@ from pathlib import Path
 
 #: Sub-packages or modules (first component below the top package) and what they must not import.
 FORBIDDEN = {
-    "models": {"analysis", "fitting", "export", "mitsuba", "figures", "explorer", "cli"},
-    "mitsuba": {"fitting", "figures", "explorer", "cli"},
+    "models": {"analysis", "fitting", "export", "mitsuba", "figures", "explorer", "cli", "conversion"},
+    "mitsuba": {"fitting", "figures", "explorer", "cli", "conversion"},
+    "fitting": {"conversion"},
     "vec": {"bxdf", "registry"},
     "warps": {"bxdf", "registry"},
 }

@@ -17,9 +17,10 @@ def model_cases(max_variants=4):
             for n in plausible.names() for kw in variants(n, max_variants)]
 
 
-def random_upper(rng, n, zmin=0.0):
-    """Uniform random directions on the upper hemisphere (z > zmin)."""
-    z = rng.uniform(zmin, 1.0, n)
+def random_upper(rng, n, zmin=0.0, zmax=1.0):
+    """Uniform random directions on the upper hemisphere with ``zmin <= z < zmax``
+    (the tests' one generator of random directions: ``z``, then the azimuth)."""
+    z = rng.uniform(zmin, zmax, n)
     phi = rng.uniform(0, 2 * math.pi, n)
     s = np.sqrt(1 - z * z)
     return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)

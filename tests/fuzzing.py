@@ -44,7 +44,7 @@ from plausible.analysis.suite import variants
 from plausible.bxdf import mixture_probabilities
 from plausible.models import ashikhmin_shirley as AS
 from plausible.models import phong as PH
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 #: ``cos(theta)`` of the special incidences (1e-14 and 0 lie at or below the
 #: models' horizon, 1e-12, where every value must be 0).

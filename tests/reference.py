@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import special, stats
 
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 TWO_PI = 2.0 * math.pi
 
@@ -50,6 +50,17 @@ def mc_albedo(model, wi, n=200_000, seed=1):
     u = np.random.default_rng(seed).random((n, 3))
     w = model.sample(wi, u).weight
     return float(w.mean()), float(w.std() / math.sqrt(n))
+
+
+def mc_albedos(model, wi, n, seed):
+    """Monte Carlo albedo with the model's own sampler: (mean, standard error)
+    of the channel-mean weight, for each leading index of ``wi`` (k, 3)."""
+    wi = np.atleast_2d(wi)[:, None, :]
+    u = np.random.default_rng(seed).random((wi.shape[0], n, 3))
+    w = model.sample(wi, u).weight
+    if w.ndim == 3:
+        w = w.mean(axis=-1)
+    return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)
 
 
 def chi2_sampler_pvalue(model, wi, n=100_000, nmu=10, nphi=20, seed=7, sub=12):
@@ -174,7 +185,7 @@ def hooks_agree(model, wi, wo, u, *, rtol=1e-12, atol=1e-300, rtol_sample=1e-9, 
         pytest.skip(f"Dr.Jit LLVM backend unavailable: {e}")
     from types import SimpleNamespace
 
-    from plausible.ops import drjit_ops
+    from plausible.arrays.ops import drjit_ops
 
     ops = drjit_ops(Float64)
     n = len(wi)

@@ -13,7 +13,7 @@ import pytest
 
 import plausible
 from conftest import model_cases, random_upper
-from plausible import backend
+from plausible.arrays import backend
 from plausible.bxdf import BxDF
 
 CASES = model_cases(max_variants=0)
@@ -137,7 +137,7 @@ def test_numpy_only_install_works_and_refuses_drjit_clearly(tmp_path):
     asking for Dr.Jit names the missing extra."""
     script = BLOCKER + textwrap.dedent("""
         import numpy as np, plausible
-        from plausible import backend
+        from plausible.arrays import backend
         assert not backend.drjit_available()
         m = plausible.make("lambertian", rd=0.4)
         wo = np.tile([0.0, 0.6, 0.8], (backend.AUTO_MIN_ROWS, 1))

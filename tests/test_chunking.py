@@ -1,4 +1,4 @@
-"""Chunked evaluation of the NumPy contract (``plausible.bxdf.CHUNK``).
+"""Chunked evaluation of the NumPy contract (``plausible.directions.CHUNK``).
 
 Batches of more than ``CHUNK`` direction pairs are processed ``CHUNK`` pairs at
 a time into preallocated outputs.  The truth here is the unchunked evaluation
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import plausible
-import plausible.bxdf as bx
+import plausible.directions as bx
 
 #: Scalar and colour models, isotropic and anisotropic, analytic and tabulated.
 MODELS = [

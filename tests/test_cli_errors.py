@@ -61,13 +61,13 @@ def test_check_all_json_reports_every_model_and_a_failing_one(two_models, monkey
             raise RuntimeError("broken on purpose")
         return real(m, **kw)
 
-    monkeypatch.setattr(cli, "run_check", broken)
-    r = run("check", "--all", "--quick", "--json")
+    monkeypatch.setattr(cli, "run_check", broken)    # in this process: --jobs 1
+    r = run("check", "--all", "--quick", "--json", "--jobs", "1")
     d = json.loads(r.output)
     assert r.exit_code == 1 and [x["model"] for x in d] == ["lambertian", "reciprocal-blinn"]
     assert d[0]["passed"] is False and d[0]["error"] == "RuntimeError: broken on purpose"
     assert d[0]["params"] == {"rd": 0.8} and d[1]["passed"] is True
-    r = run("check", "--all", "--quick")
+    r = run("check", "--all", "--quick", "--jobs", "1")
     assert r.exit_code == 1
     assert "failed with an error: RuntimeError: broken on purpose" in r.output
     last = r.output.strip().splitlines()[-1]

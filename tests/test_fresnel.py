@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from plausible import fresnel
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 def fresnel_cmath(cos_i, n, k):
@@ -109,7 +109,7 @@ def test_numpy_and_drjit_agree():
     dr = pytest.importorskip("drjit")
     from drjit.llvm import Float64
 
-    from plausible.ops import drjit_ops
+    from plausible.arrays.ops import drjit_ops
     ops = drjit_ops(Float64)
     c = np.linspace(0.0, 1.0, 33)
     for n, k in [(0.27, 2.78), (1.5, 0.0), (0.7, 0.0)]:

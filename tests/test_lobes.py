@@ -9,7 +9,7 @@ import plausible
 from conftest import model_cases, random_upper
 from plausible.bxdf import Lobe, mixture_f, mixture_pdf, mixture_probabilities, mixture_sample
 from plausible.models.sum import Sum
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 from reference import from_angles, hemisphere_rule
 
 CASES = model_cases(max_variants=2)

@@ -1,8 +1,11 @@
-"""plausible: physically plausible reflection models of the Phong family.
+"""plausible: physically plausible BRDFs under one contract (:mod:`plausible.bxdf`).
 
-Evaluate, sample, verify, fit and render the Ashikhmin-Shirley anisotropic
-Phong BRDF, the Modified Phong BRDF, the reciprocal Phong/Blinn models and
-albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
+Evaluate, sample, check (reciprocity, energy, sampling, chi-square), fit,
+export (GLSL, BRDF Explorer, glTF) and render (Mitsuba 3 plugins) every
+registered model -- the Phong family, Lafortune, Schlick, Ward, Cook-Torrance,
+He-Torrance, Low, albedo pumping-up, ... (:func:`names`) -- the published MERL
+fits (:func:`material`), and foreign BSDFs through adapters.  The package's
+floors are drawn in ``docs/index.md`` ("Structure").
 
 >>> import plausible
 >>> m = plausible.make("modified-phong", kd=0.5, ks=0.5, n=10)
@@ -10,11 +13,12 @@ albedo pumping-up, all under one contract (:mod:`plausible.bxdf`).
 1.11408
 """
 
-from .analysis import (albedo, albedo_curve, check, chi2, energy, hemispherical_albedo, reciprocity,
+from .analysis import (albedo, albedo_curve, check, chi2, compensate, energy, hemispherical_albedo, reciprocity,
                        sampling_consistency)
-from .backend import use as use_backend
+from .arrays.backend import use as use_backend
 from .bxdf import BxDF, Sample
 from .fitting import fit
+from .conversion import convert  # (after fitting: it fits)
 from .catalogue import material, materials
 from .models.sum import Sum
 from .registry import info, make, names, register
@@ -22,6 +26,6 @@ from .vec import angles, direction
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "direction", "energy", "fit",
+__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "compensate", "convert", "direction", "energy", "fit",
            "hemispherical_albedo", "info", "make", "material", "materials", "names", "reciprocity", "register",
            "sampling_consistency", "use_backend", "__version__"]

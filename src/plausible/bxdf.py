@@ -47,17 +47,13 @@ from typing import Callable, ClassVar, NamedTuple
 
 import numpy as np
 
-from . import backend as _backend
+from .arrays import backend as _backend
+from . import directions as D
 from . import kernel_params, vec
-from .ops import NP
+from .arrays.ops import NP
 from .params import Param, spec_value
 from .text import fmt
 from .vec import HORIZON
-
-#: Largest number of direction pairs evaluated in one NumPy pass; bigger batches
-#: are processed in chunks so memory stays bounded.
-CHUNK = 1 << 20
-
 
 class Sample(NamedTuple):
     """Result of :meth:`BxDF.sample`."""
@@ -65,174 +61,6 @@ class Sample(NamedTuple):
     wo: np.ndarray
     weight: np.ndarray
     pdf: np.ndarray
-
-
-def _as_array(name: str, w) -> np.ndarray:
-    """``w`` as a float64 array of shape ``(..., 3)`` (not normalised)."""
-    try:
-        a = np.asarray(w, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a float array of shape (..., 3), got {_short(w)}") from None
-    if a.ndim == 0 or a.shape[-1] != 3:
-        raise ValueError(f"{name} must have shape (..., 3), got {a.shape}")
-    return a
-
-
-def _short(v) -> str:
-    """``repr(v)``, cut to 60 characters (for error messages)."""
-    r = repr(v)
-    return r if len(r) <= 60 else r[:57] + "..."
-
-
-def _blocks(a: np.ndarray):
-    """``a`` of shape ``(..., 3)`` as consecutive ``(<= CHUNK, 3)`` row blocks."""
-    rows = a.reshape(-1, 3)
-    for s in range(0, max(len(rows), 1), CHUNK):
-        yield rows[s:s + CHUNK]
-
-
-def _norm2(a: np.ndarray) -> np.ndarray:
-    """``x^2 + y^2 + z^2`` over the last axis, summed left to right: bitwise the
-    value of ``np.sum(a * a, axis=-1)`` (a length-3 reduction adds in order),
-    without NumPy's slow reduction over a short last axis."""
-    x, y, z = a[..., 0], a[..., 1], a[..., 2]
-    return x * x + y * y + z * z
-
-
-def _max_abs(a: np.ndarray) -> np.ndarray:
-    """The largest ``|component|`` of each row of ``a`` (shape ``(..., 3)``)."""
-    return np.maximum(np.maximum(np.abs(a[..., 0]), np.abs(a[..., 1])), np.abs(a[..., 2]))
-
-
-#: ``|a|^2`` outside ``(_SAFE_LO, _SAFE_HI)`` may have under- or overflowed: those
-#: rows are rescaled by their largest component before normalising.
-_SAFE_LO, _SAFE_HI = 1e-290, 1e290
-#: ``| |a|^2 - 1 |`` up to which a direction counts as unit (about 18 ulp; a
-#: normalised vector is within 3 ulp of it).
-UNIT_TOL = 4e-15
-
-
-def _check_block(name: str, b: np.ndarray, check_zero: bool = True):
-    with np.errstate(over="ignore", under="ignore"):
-        s = _norm2(b)
-    if not np.all(np.isfinite(s)) and not np.all(np.isfinite(b)):
-        raise ValueError(f"{name} must be finite (found NaN or inf)")
-    if check_zero:
-        z = s == 0  # |b|^2 may underflow for a tiny non-zero b (1e-170): ask its components
-        if np.any(z) and np.any(_max_abs(b[z]) == 0):
-            raise ValueError(f"{name} must be non-zero vectors (a zero vector has no direction)")
-    return s
-
-
-def _check_directions(name: str, a: np.ndarray) -> None:
-    """The checks of :func:`as_directions`, in its order (a NaN anywhere before a
-    zero vector anywhere), ``CHUNK`` rows at a time (so that checking allocates
-    O(CHUNK), not O(N), temporaries)."""
-    for b in _blocks(a):
-        _check_block(name, b, check_zero=False)
-    for b in _blocks(a):
-        _check_block(name, b)
-
-
-def _normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
-    """``a / |a|`` (``s``: ``_norm2(a)`` if already computed).  Rows whose
-    ``|a|^2`` under- or overflows (components below 1e-145 or above 1e145) are
-    first divided by their largest component, so ``[1e200, 0, 1e200]`` and
-    ``[1e-170, 0, 1e-170]`` give the direction of ``[1, 0, 1]``.  Rows already
-    unit to rounding (``| |a|^2 - 1 | <= UNIT_TOL``, e.g. a sampled ``wo``) are
-    kept as given: normalising twice moves a direction by an ulp, and a density
-    that is steep there (a ``cos^n`` lobe with ``n < 1`` near its edge, a
-    direction at the horizon threshold) would then differ from the pdf that
-    ``sample`` returned for it."""
-    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-        s = _norm2(a) if s is None else s
-        out = np.where((np.abs(s - 1.0) <= UNIT_TOL)[..., None], a, a / np.sqrt(s)[..., None])
-        bad = ~((s > _SAFE_LO) & (s < _SAFE_HI))
-        if np.any(bad):
-            b = np.broadcast_to(a, out.shape)[bad]
-            b = b / _max_abs(b)[..., None]
-            out[bad] = b / np.sqrt(_norm2(b))[..., None]
-    return out
-
-
-def _checked_unit(name: str, a: np.ndarray) -> np.ndarray:
-    """:func:`_check_directions` and :func:`_normalise` in one pass (batches of at
-    most ``CHUNK`` rows)."""
-    return _normalise(a, _check_block(name, a))
-
-
-def as_directions(name: str, w) -> np.ndarray:
-    """Validate and normalise an array of directions of shape ``(..., 3)``."""
-    a = _as_array(name, w)
-    if a.size <= 3 * CHUNK:
-        return _checked_unit(name, a)
-    _check_directions(name, a)
-    return _normalise(a)
-
-
-def _prepare(name: str, w):
-    """Validate ``w``; return ``(array, unit)``: normalised (``unit`` True) when it
-    has at most ``CHUNK`` rows, else raw (checked by blocks; the caller normalises
-    chunk by chunk, so no O(N) normalised copy exists)."""
-    a = _as_array(name, w)
-    if a.size <= 3 * CHUNK:
-        return _checked_unit(name, a), True
-    _check_directions(name, a)
-    return a, False
-
-
-def _unit_fn(unit: bool):
-    return (lambda a: a) if unit else _normalise
-
-
-def _as_unit_interval(u) -> np.ndarray:
-    """``u`` as a float64 array of shape ``(..., 3)`` in ``[0, 1]`` (checked by blocks)."""
-    try:
-        u = np.asarray(u, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("u must be a float array of shape (..., 3)") from None
-    if u.ndim == 0 or u.shape[-1] != 3:
-        raise ValueError(f"u must have shape (..., 3), got {u.shape}")
-    for b in _blocks(u):
-        bad = ~((b >= 0) & (b <= 1))
-        if np.any(bad):
-            raise ValueError(f"u must lie in [0, 1], got {float(b[bad][0])!r}")
-    return u
-
-
-def _flat_rows(a: np.ndarray, shape: tuple, n: int):
-    """A function ``(start, stop) -> rows`` reading ``a`` broadcast to ``shape + (3,)``
-    as ``n`` flattened rows, without materialising the broadcast array: a view
-    when the broadcast reshapes without a copy, else a gather of just those rows."""
-    b = np.broadcast_to(a, shape + (3,))
-    try:
-        flat = np.reshape(b, (n, 3), copy=False)
-        return lambda s, e: flat[s:e]
-    except ValueError:
-        return lambda s, e: b[np.unravel_index(np.arange(s, e), shape)]
-
-
-def _chunked(shape: tuple, arrays, block, outs):
-    """Run ``block(*chunk_arrays, chunk_shape)`` on ``CHUNK``-row slices of the
-    flattened broadcast ``arrays`` and write its results into ``outs``
-    (preallocated, flattened, one per result).  Peak memory: the outputs plus
-    the temporaries of one chunk."""
-    n = int(np.prod(shape))
-    readers = [_flat_rows(a, shape, n) for a in arrays]
-    for s in range(0, n, CHUNK):
-        e = min(s + CHUNK, n)
-        res = block(*(r(s, e) for r in readers), (e - s,))
-        for o, r in zip(outs, res if isinstance(res, tuple) else (res,)):
-            o[s:e] = r
-        del res, r  # free this chunk's results before the next chunk allocates its own
-
-
-def split(a):
-    return (a[..., 0], a[..., 1], a[..., 2])
-
-
-def stack(c):
-    return np.stack(np.broadcast_arrays(*c), axis=-1)
 
 
 class Lobe(NamedTuple):
@@ -440,6 +268,14 @@ class BxDF:
         (:func:`plausible.kernel_params.default_structure`)."""
         return kernel_params.default_structure(self)
 
+    @property
+    def reciprocal(self) -> bool:
+        """Whether the model claims ``f(wi, wo) = f(wo, wi)``: the one place to ask.
+        Its registry entry's claim (``register(reciprocal=...)``); a model outside the
+        registry (a variant in :mod:`plausible.models.published`, a
+        :class:`~plausible.models.sum.Sum`) states its own by overriding this."""
+        return bool(self.info.reciprocal) if self.info is not None else False
+
     # -- the NumPy contract --------------------------------------------------------
     @property
     def name(self) -> str:
@@ -455,17 +291,17 @@ class BxDF:
 
     def eval(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """BRDF value ``f(wi, wo)`` (no cosine factor).  Batches of more than
-        :data:`CHUNK` pairs are evaluated ``CHUNK`` pairs at a time.  ``backend``:
+        :data:`plausible.directions.CHUNK` pairs are evaluated ``CHUNK`` pairs at a time.  ``backend``:
         ``"auto"``, ``"numpy"`` or ``"drjit"`` (:mod:`plausible.backend`)."""
-        (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
+        (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
         be = _backend.choose(n, self, backend, kernel="eval")
-        if n <= CHUNK:
-            return self._eval_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape, be)
+        if n <= D.CHUNK:
+            return self._eval_block(D.unit_fn(wi_unit)(wi), D.unit_fn(wo_unit)(wo), shape, be)
         out = np.empty((n,) + self._out_shape(())[:1])
-        ni, no = _unit_fn(wi_unit), _unit_fn(wo_unit)
-        _chunked(shape, (wi, wo), lambda a, b, sh: self._eval_block(ni(a), no(b), sh, be), (out,))
+        ni, no = D.unit_fn(wi_unit), D.unit_fn(wo_unit)
+        D.chunked(shape, (wi, wo), lambda a, b, sh: self._eval_block(ni(a), no(b), sh, be), (out,))
         return out.reshape(self._out_shape(shape))
 
     def _eval_block(self, wi, wo, shape, backend="numpy"):
@@ -473,21 +309,21 @@ class BxDF:
             return _backend.run(self, "eval", lambda: self._eval_block(wi, wo, shape),
                                 lambda: _backend.eval_block(self, wi, wo, shape))
         with np.errstate(all="ignore"):
-            v = self._f(NP, self._color_axis(split(wi)), self._color_axis(split(wo)), self.p)
+            v = self._f(NP, self._color_axis(D.split(wi)), self._color_axis(D.split(wo)), self.p)
         return np.array(np.broadcast_to(v, self._out_shape(shape)), dtype=np.float64)
 
     def pdf(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """Solid-angle density of :meth:`sample` producing ``wo`` from ``wi``
         (chunked like :meth:`eval`; ``backend`` as there)."""
-        (wi, wi_unit), (wo, wo_unit) = _prepare("wi", wi), _prepare("wo", wo)
+        (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
         be = _backend.choose(n, self, backend, kernel="pdf")
-        if n <= CHUNK:
-            return self._pdf_block(_unit_fn(wi_unit)(wi), _unit_fn(wo_unit)(wo), shape, be)
+        if n <= D.CHUNK:
+            return self._pdf_block(D.unit_fn(wi_unit)(wi), D.unit_fn(wo_unit)(wo), shape, be)
         out = np.empty(n)
-        ni, no = _unit_fn(wi_unit), _unit_fn(wo_unit)
-        _chunked(shape, (wi, wo), lambda a, b, sh: self._pdf_block(ni(a), no(b), sh, be), (out,))
+        ni, no = D.unit_fn(wi_unit), D.unit_fn(wo_unit)
+        D.chunked(shape, (wi, wo), lambda a, b, sh: self._pdf_block(ni(a), no(b), sh, be), (out,))
         return out.reshape(shape)
 
     def _pdf_block(self, wi, wo, shape, backend="numpy"):
@@ -495,24 +331,24 @@ class BxDF:
             return _backend.run(self, "pdf", lambda: self._pdf_block(wi, wo, shape),
                                 lambda: _backend.pdf_block(self, wi, wo, shape))
         with np.errstate(all="ignore"):
-            v = self._pdf(NP, split(wi), split(wo), self.q)
+            v = self._pdf(NP, D.split(wi), D.split(wo), self.q)
         return np.array(np.broadcast_to(v, shape), dtype=np.float64)
 
     def sample(self, wi, u, *, backend: str | None = None) -> Sample:
         """Importance-sample ``wo`` given ``wi`` from uniform numbers ``u`` (..., 3)
         (chunked like :meth:`eval`; ``backend`` as there)."""
-        wi, wi_unit = _prepare("wi", wi)
-        u = _as_unit_interval(u)
+        wi, wi_unit = D.prepare("wi", wi)
+        u = D.as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
         n = int(np.prod(shape))
         be = _backend.choose(n, self, backend, kernel="sample")
-        ni = _unit_fn(wi_unit)
-        if n <= CHUNK:
+        ni = D.unit_fn(wi_unit)
+        if n <= D.CHUNK:
             return self._sample_block(ni(wi), u, shape, be)
         wo = np.empty((n, 3))
         weight = np.empty((n,) + self._out_shape(())[:1])
         pdf = np.empty(n)
-        _chunked(shape, (wi, u), lambda a, b, sh: tuple(self._sample_block(ni(a), b, sh, be)),
+        D.chunked(shape, (wi, u), lambda a, b, sh: tuple(self._sample_block(ni(a), b, sh, be)),
                  (wo, weight, pdf))
         return Sample(wo.reshape(shape + (3,)), weight.reshape(self._out_shape(shape)), pdf.reshape(shape))
 
@@ -523,14 +359,14 @@ class BxDF:
         wi = np.broadcast_to(wi, shape + (3,))
         u = np.broadcast_to(u, shape + (3,))
         with np.errstate(all="ignore"):
-            wo_c = self._sample(NP, split(wi), split(u), self.q)
-            wo = stack(wo_c)
+            wo_c = self._sample(NP, D.split(wi), D.split(u), self.q)
+            wo = D.stack(wo_c)
             wo = np.broadcast_to(wo, shape + (3,))
-            n = np.sqrt(_norm2(wo))[..., None]
+            n = np.sqrt(D.norm2(wo))[..., None]
             wo = np.where(n > 0, wo / np.where(n > 0, n, 1.0), np.array([0.0, 0.0, -1.0]))
-            wo_c = split(wo)
-            pdf = np.broadcast_to(self._pdf(NP, split(wi), wo_c, self.q), shape)
-            f = self._f(NP, self._color_axis(split(wi)), self._color_axis(wo_c), self.p)
+            wo_c = D.split(wo)
+            pdf = np.broadcast_to(self._pdf(NP, D.split(wi), wo_c, self.q), shape)
+            f = self._f(NP, self._color_axis(D.split(wi)), self._color_axis(wo_c), self.p)
             # a pdf below 1e-250 is a sample that cannot occur (and cos/pdf would overflow)
             ok = (pdf > 1e-250) & (wo[..., 2] > HORIZON) & (wi[..., 2] > HORIZON)
             ratio = np.where(ok, wo[..., 2] / np.where(ok, pdf, 1.0), 0.0)

@@ -128,10 +128,12 @@ class _Group(click.Group):
 @click.version_option(package_name="plausible")
 @click.pass_context
 def main(ctx):
-    """Physically plausible reflection models of the Phong family.
+    """Physically plausible BRDFs: evaluate, sample, check, fit, export and render.
 
-    Evaluate, sample, verify and plot the models of Ashikhmin & Shirley (2000),
-    Neumann, Neumann & Szirmay-Kalos (1999) and Lafortune & Willems (1994).
+    The Phong family (Ashikhmin & Shirley, Modified Phong, reciprocal Phong and
+    Blinn, albedo pumping-up), Lafortune, Schlick, Ward, Cook-Torrance, He-Torrance,
+    Low and more; the published MERL fits (material:NAME@FIT); any Mitsuba BSDF or
+    Python callable through the same checks.
     """
     import os
 
@@ -261,7 +263,7 @@ def eval_cmd(model, params, wi, wo, as_json):
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), metavar="DIR",
               help="With --materials: write materials-table.md/.csv (and materials.md's summary) here.")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
-              help="With --materials: worker processes (default: the usable cores, at most 2).")
+              help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
           python_obj, all_materials, fit_keys, material_names, out_dir, jobs):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
@@ -284,7 +286,7 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
-    if all_materials or fit_keys or material_names or out_dir or jobs:
+    if all_materials or fit_keys or material_names or out_dir or (jobs and not all_models):
         return _check_materials(all_materials, fit_keys, material_names, out_dir, jobs, quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
     foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
@@ -300,9 +302,17 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     else:
         targets = [_model(model, params)]
     reports, verdicts, rows = [], [], []
+    done = None
+    if all_models and (jobs or _default_jobs()) > 1:   # whole models in worker processes, reports in order
+        from .analysis.suite import check_many
+
+        done = iter(check_many(targets, quick=quick, jobs=jobs or _default_jobs(),
+                               progress=silent if as_json else _bar()))
     for m in targets:
         try:
-            rep = run_check(m, quick=quick, progress=silent if as_json else _bar())
+            rep = run_check(m, quick=quick, progress=silent if as_json else _bar()) if done is None else next(done)
+            if isinstance(rep, Exception):
+                raise rep
         except Exception as e:   # noqa: BLE001  one model's failure is reported, the others still run
             if not all_models:
                 raise
@@ -334,6 +344,12 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
                        f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
                        f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
     sys.exit(0 if all(verdicts) else 1)
+
+
+def _default_jobs() -> int:
+    from .analysis.materials import default_jobs
+
+    return default_jobs()
 
 
 def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_json, other):
@@ -591,6 +607,48 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
             console.print(f"wrote {escape(str(p))}")
 
 
+@main.command("convert")
+@click.argument("source")
+@click.option("--to", "to", required=True, metavar="TARGET",
+              help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, "
+                   "principled), gltf, or a registered model.")
+@click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
+              help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
+                   "or .gltf (with --to gltf).")
+@click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
+              show_default=True, help="Error metric minimised (see docs/fitting.md).")
+@click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
+def convert_cmd(source, to, out, metric, as_json):
+    """Convert SOURCE's materials to TARGET, with the error measured (docs/convert.md).
+
+    SOURCE: a model spec, material:NAME@FIT, a Mitsuba BSDF (.xml, or .json of dicts by name),
+    or a Wavefront .mtl file.
+    """
+    from pathlib import Path
+
+    from .conversion import convert
+
+    if Path(out).suffix.lower() not in (".json", ".xml", ".gltf"):
+        _fail(f"--out must end in .json, .xml or .gltf, got {out!r}")
+    try:
+        res = convert(source, to=to, metric=metric)
+        path = res.write(out)
+    except ValueError as e:
+        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))
+    if as_json:
+        _echo_json(res.to_json())
+        return
+    t = Table()
+    for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "warnings"):
+        t.add_column(col)
+    for c in res.items:
+        diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo)
+        t.add_row(escape(c.name), escape(c.target), f"{c.errors['perceptual']:.3g}", diffs,
+                  escape("; ".join(c.warnings)) or "-")
+    console.print(t)
+    console.print(f"wrote {escape(str(path))}")
+
+
 @main.command("fit-batch")
 @click.argument("targets", nargs=-1, required=True)
 @click.option("--models", required=True, metavar="A,B,...", help="Models to fit (comma-separated registry names).")
@@ -725,7 +783,9 @@ def explore(port, host, no_browser):
 @click.option("--quick", is_flag=True, help="Small images and sample counts (the CI mode).")
 @click.option("--force", is_flag=True, help="Remake figures even when their inputs have not changed.")
 @click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")
-def figures(out, only, spp, resolution, quick, force, list_only):
+@click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
+              help="Worker processes making figures side by side (default: the cores available, at most 2).")
+def figures(out, only, spp, resolution, quick, force, list_only, jobs):
     """Reproduce the papers' figures as a browsable report (OUT/index.html).
 
     Exits with status 1 when a figure fails or a measured check does not hold.
@@ -741,8 +801,10 @@ def figures(out, only, spp, resolution, quick, force, list_only):
     try:    # unknown names and an unwritable folder fail before anything is made
         only = list(dict.fromkeys(F.get(n).name for n in only))
         check_writable_dir(out, "--out", create=True)
+        from .figures.report import default_jobs
+
         res = F.run(out, only=only or None, spp=spp, resolution=resolution, quick=quick, force=force,
-                    console=console, progress=_bar())
+                    console=console, progress=_bar(), jobs=jobs or default_jobs())
     except ValueError as e:
         _fail(str(e))
     failed = [n for n, m in res.items() if m["status"] != "ok"]

@@ -45,6 +45,42 @@ class Param:
         """The values a choice may take, for menus (:attr:`choices`)."""
         return list(self.choices)
 
+    # -- the kind's conversions (a kind with other values overrides them) ------------
+    def parse(self, text: str):
+        """The value of the command line's or the explorer's text: a choice as
+        written, anything else by :func:`parse_value` (``0.5``, ``r,g,b``, groups)."""
+        return text if self.kind == "choice" else parse_value(text.strip())
+
+    def spec_text(self, value) -> str:
+        """The value in a model spec (:func:`spec_value`; read back by :meth:`parse`)."""
+        return spec_value(value)
+
+    def to_json(self, value):
+        """The value as plain JSON (the explorer's sliders and menus): a colour as a
+        list, groups of numbers as their ``a,b;c,d;`` text, a number or a string as is."""
+        if isinstance(value, np.ndarray):
+            return value.tolist()
+        if isinstance(value, (list, tuple)):
+            if value and isinstance(value[0], (list, tuple)):
+                return ";".join(",".join(f"{float(x):g}" for x in g) for g in value) + ";"
+            return [float(x) for x in value]
+        return value
+
+    def to_mitsuba(self, value):
+        """The value in a Mitsuba scene dict (:mod:`plausible.mitsuba.scene_dict`):
+        a colour as a float or ``{"type": "rgb", "value": [r, g, b]}``, groups as
+        :func:`format_groups` text, a number as a float, a choice as its string."""
+        if self.kind == "color":
+            arr = np.atleast_1d(np.asarray(value, dtype=np.float64))
+            if arr.size == 1:
+                return float(arr[0])
+            return {"type": "rgb", "value": [float(x) for x in arr]}
+        if isinstance(value, (list, tuple)):
+            return format_groups(value)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        return value
+
     def validate(self, value, owner: str = "model", channels: tuple = None):
         """Return the value converted (float, or float64 array for colours).
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from .ops import PI
+from .arrays.ops import PI
 
 #: Chebyshev coefficients of ``log(erfcx(z) (2 + z) / 2)`` in ``x = (2 - z) / (2 + z)``.
 ERFCX_CHEB = (

@@ -30,7 +30,7 @@ from importlib import resources
 import numpy as np
 
 from . import fresnel
-from .ops import NP
+from .arrays.ops import NP
 
 #: Metal names and the data file stem of each.
 METALS = {"Au": "Au", "gold": "Au", "Ag": "Ag", "silver": "Ag",

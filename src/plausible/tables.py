@@ -91,7 +91,7 @@ class AngleTable:
     def lookup_angles(self, thetas, phis=None):
         """NumPy convenience: values at polar angles ``thetas`` (radians), shape
         ``(len(thetas),)``, or ``(len(thetas), len(phis))`` for a 2-D table."""
-        from .ops import NP
+        from .arrays.ops import NP
 
         t = np.asarray(thetas, dtype=np.float64)
         if phis is None:

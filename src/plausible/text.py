@@ -4,6 +4,7 @@
   text; the model ``repr`` (also the pumped-up table cache key), the command
   line's tables, fit summaries and the figures report use it with their own
   number format and separators.
+* :func:`shorten` -- a value's text cut for an error message;
 * :func:`html_table` -- a small HTML table, the ``_repr_html_`` of models,
   reports and results in a notebook.
 * :func:`jsonable` -- plain JSON data from results holding NumPy arrays and
@@ -60,6 +61,15 @@ def jsonable(x):
     return x
 
 
+def shorten(text: str, n: int = 60) -> str:
+    """``text`` cut to ``n`` characters, the last three ``...`` (for error messages).
+
+    >>> shorten("x" * 70)[-5:], len(shorten("x" * 70))
+    ('xx...', 60)
+    """
+    return text if len(text) <= n else text[:n - 3] + "..."
+
+
 def html_table(caption: str, header, rows) -> str:
     """An HTML ``<table>`` (every cell escaped) with a caption, for notebooks.
 
@@ -73,4 +83,4 @@ def html_table(caption: str, header, rows) -> str:
     return f"<table><caption>{escape(str(caption))}</caption><tr>{head}</tr>{body}</table>"
 
 
-__all__ = ["fmt", "html_table", "jsonable"]
+__all__ = ["fmt", "html_table", "jsonable", "shorten"]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from . import vec
 from .vec import HORIZON
-from .ops import INV_PI, PI
+from .arrays.ops import INV_PI, PI
 
 
 def cosine_hemisphere(ops, u1, u2):

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import plausible
+from reference import mc_albedo
 from plausible.analysis import albedo, albedo_curve, direction, hemispherical_albedo, is_isotropic
 
 THETAS = (0, 30, 60, 80, 85, 89, 89.9)
@@ -29,12 +30,6 @@ def test_albedo_at_most_one_and_finite_on_the_grid(name, n):
     assert res.value[0] == pytest.approx(1.0, abs=1e-8)   # normalisation: exactly 1 at normal incidence
 
 
-def _mc_albedo(m, wi, n=400_000, seed=0):
-    s = m.sample(wi, np.random.default_rng(seed).random((n, 3)))
-    w = s.weight if s.weight.ndim == 1 else s.weight.mean(-1)
-    return w.mean(), w.std() / math.sqrt(n)
-
-
 @pytest.mark.parametrize("name,kw", [
     ("reciprocal-phong", dict(n=1e4)), ("reciprocal-blinn", dict(n=1e4)), ("reciprocal-blinn", dict(n=3)),
     ("modified-phong", dict(kd=0.3, ks=0.7, n=500)), ("phong", dict(n=50)),
@@ -44,7 +39,7 @@ def test_quadrature_agrees_with_monte_carlo(name, kw, theta):
     m = plausible.make(name, **kw)
     wi = direction(math.radians(theta), 0.7)
     q = albedo(m, wi)
-    mc, se = _mc_albedo(m, wi)
+    mc, se = mc_albedo(m, wi, n=400_000, seed=0)
     assert abs(q.value - mc) < 5 * se + q.error + 1e-12
 
 

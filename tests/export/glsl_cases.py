@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from conftest import random_upper
 
 #: Relative error allowed against NumPy where f is above ``FLOOR`` of its maximum (float32 shaders).
 RTOL = 1e-4
@@ -13,13 +14,6 @@ FLOOR = 1e-6
 
 def _unit(v):
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def _upper(rng, n, zlo=0.0, zhi=1.0):
-    z = rng.uniform(zlo, zhi, n)
-    phi = rng.uniform(0.0, 2.0 * math.pi, n)
-    s = np.sqrt(1.0 - z * z)
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
 
 
 def _rotate_towards(w, rng, angles):
@@ -37,19 +31,19 @@ def direction_pairs(seed: int = 7, n: int = 4096):
     rng = np.random.default_rng(seed)
     q = n // 8
     wi, wo = [], []
-    wi.append(_upper(rng, 3 * q)); wo.append(_upper(rng, 3 * q))            # random
+    wi.append(random_upper(rng, 3 * q)); wo.append(random_upper(rng, 3 * q))            # random
     wo[-1][: q // 8, 2] *= -1.0                                                # some below the horizon
-    g = _upper(rng, q, 1e-5, 0.02)
-    wi.append(g); wo.append(_upper(rng, q))                                   # grazing wi
-    wi.append(_upper(rng, q // 2)); wo.append(_upper(rng, q // 2, 1e-5, 0.02))  # grazing wo
-    m = _upper(rng, q // 2)
+    g = random_upper(rng, q, 1e-5, 0.02)
+    wi.append(g); wo.append(random_upper(rng, q))                                   # grazing wi
+    wi.append(random_upper(rng, q // 2)); wo.append(random_upper(rng, q // 2, 1e-5, 0.02))  # grazing wo
+    m = random_upper(rng, q // 2)
     wi.append(m); wo.append(m * np.array([-1.0, -1.0, 1.0]))                  # the mirror direction
-    m = _upper(rng, 2 * q, 0.05, 1.0)
+    m = random_upper(rng, 2 * q, 0.05, 1.0)
     ang = np.exp(rng.uniform(math.log(1e-4), math.log(0.3), 2 * q))
     wi.append(m); wo.append(_rotate_towards(m * np.array([-1.0, -1.0, 1.0]), rng, ang))  # near mirror
     k = n - sum(len(a) for a in wi)
-    m = _upper(rng, k, 0.95, 1.0)
-    wi.append(m); wo.append(_upper(rng, k, 0.95, 1.0))                        # near the normal
+    m = random_upper(rng, k, 0.95, 1.0)
+    wi.append(m); wo.append(random_upper(rng, k, 0.95, 1.0))                        # near the normal
     wi = np.concatenate(wi).astype(np.float32)
     wo = np.concatenate(wo).astype(np.float32)
     return wi, wo

@@ -13,7 +13,7 @@ import plausible
 from plausible.cli import main
 from plausible.export import to_brdf, to_glsl
 from plausible.export.glsl import Emitter, literal
-from plausible.symbolic import direction
+from plausible.arrays.symbolic import direction
 
 
 def test_literals_are_floats():
@@ -216,7 +216,7 @@ def test_a_resampled_table_measures_its_own_interpolation_error():
     rng = np.random.default_rng(1)
     t, p = rng.uniform(0, np.pi / 2, 20000), rng.uniform(0, 2 * np.pi, 20000)
     w = (np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t))
-    from plausible.ops import NP
+    from plausible.arrays.ops import NP
 
     true = np.max(np.abs(coarse.lookup(NP, w) - _smooth_albedo(t, p)) / _smooth_albedo(t, p))
     assert 1e-5 < true and fine.difference(coarse) == pytest.approx(true, rel=0.1)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from plausible import warps
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 def test_power_near_one_is_the_power():

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 import plausible
-from plausible import symbolic
+from plausible.arrays import symbolic
 from plausible.analysis.suite import variants
-from plausible.export import _symbolic_params, uniform_params
+from plausible.export.shader import _symbolic_params, uniform_params
 from plausible.models.lambert import Lambertian
 from plausible.models.phong import ModifiedPhong
-from plausible.symbolic import SYM, SymbolicBranchError
+from plausible.arrays.symbolic import SYM, SymbolicBranchError
 
 WI, WO = symbolic.direction("wi"), symbolic.direction("wo")
 

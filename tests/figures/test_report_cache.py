@@ -5,6 +5,7 @@ writes index.html, and the CLI reports unknown names, repeats and red checks."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -83,3 +84,86 @@ def test_figures_cli_unwritable_folder(tmp_path):
     blocker.write_text("")
     r = CliRunner().invoke(main, ["figures", "--out", str(blocker / "out"), "--only", "checks"])
     assert r.exit_code == 2 and "--out: cannot write into" in r.output and "Traceback" not in r.output
+
+
+# -- worker processes (jobs > 1) ------------------------------------------------------------
+
+def _crash(ctx):
+    """A figure whose process dies mid-way, as a crash inside a renderer would."""
+    import os
+
+    ctx.steps(2)
+    ctx.tick()
+    os._exit(3)
+
+
+def _sleep(ctx):
+    import time
+
+    ctx.steps(1)
+    time.sleep(120)
+
+
+def _strip(m):
+    return {k: v for k, v in m.items() if k not in ("seconds", "cached", "measurements")}
+
+
+def _numbers(text):
+    return np.array([float(x) for x in re.findall(r"-?\d+\.?\d*(?:e[-+]?\d+)?", text)])
+
+
+def test_parallel_run_makes_the_same_report_as_one_process(tmp_path):
+    """Two real figures made by two worker processes: the same figure.json (but the
+    seconds), the same data files and the same index as in one process.  The numbers
+    agree to rounding (1e-12 relative), not to the last bit: which backend ``auto``
+    picks for a call depends on what the process compiled before (backend.choose)."""
+    from plausible.progress import Counter
+
+    figs = ["lobe-lambertian", "lobe-blinn"]
+    one = run(tmp_path / "one", only=figs, quick=True, jobs=1)
+    c = Counter()
+    two = run(tmp_path / "two", only=figs, quick=True, jobs=2, progress=c)
+    assert list(two) == figs                        # report order, whatever the finishing order
+    for n in figs:
+        assert two[n]["status"] == "ok" and _strip(two[n]) == _strip(one[n])
+        for a, b in zip(one[n]["measurements"], two[n]["measurements"], strict=True):
+            assert {**a, "measured": 0} == {**b, "measured": 0}
+            assert np.isclose(a["measured"], b["measured"], rtol=1e-12, atol=1e-15), a["quantity"]
+        files = sorted((tmp_path / "one" / n).glob("*.csv"))
+        assert files
+        for f in files:
+            x, y = _numbers(f.read_text()), _numbers((tmp_path / "two" / n / f.name).read_text())
+            assert x.shape == y.shape and np.allclose(x, y, rtol=1e-7, atol=1e-12), f   # %.8g; error bounds of 1e-11 are rounding
+        assert c.counts[n][1] == c.counts[n][0] > 0    # the workers' progress reached the parent
+    strip = lambda p: re.sub(r"made in [0-9.]+ s", "", p.read_text())   # noqa: E731
+    assert strip(tmp_path / "two" / "index.html") == strip(tmp_path / "one" / "index.html")
+
+
+def test_a_worker_that_dies_fails_its_figure_and_the_others_are_made(tmp_path, monkeypatch, fake):
+    monkeypatch.setitem(F.FIGURES, "crash", F.Figure("crash", "Crash", "test", "caption", _crash, {}))
+    res = run(tmp_path, only=["crash", fake, "lobe-lambertian"], spp=16, jobs=2)
+    assert res["crash"]["status"] == "failed" and "died (exit code 3" in res["crash"]["error"]
+    assert res[fake]["status"] == "ok" and res["lobe-lambertian"]["status"] == "ok"
+    assert not (tmp_path / "crash").exists()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []   # no partial folder left
+    assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
+
+
+def test_an_interrupted_parallel_run_ends_its_workers_and_leaves_no_partial_folder(tmp_path, monkeypatch, fake):
+    import _thread
+    import multiprocessing
+    import threading
+
+    monkeypatch.setitem(F.FIGURES, "sleep", F.Figure("sleep", "Sleep", "test", "caption", _sleep, {}))
+    run(tmp_path, only=[fake], spp=16)
+    timer = threading.Timer(6.0, _thread.interrupt_main)    # Ctrl-C while "sleep" runs
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run(tmp_path, only=["sleep", fake], spp=32, jobs=2, force=True)
+    finally:
+        timer.cancel()
+    assert multiprocessing.active_children() == []
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    assert not (tmp_path / "sleep").exists() and (tmp_path / "index.html").exists()
+    assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] in (16, 32)   # whole, of one run

@@ -159,7 +159,7 @@ def test_fixed_colour_stays_per_channel():
 
 # -- the objective on Dr.Jit (parameters as kernel data) -----------------------------------
 
-from plausible import backend as _backend  # noqa: E402
+from plausible.arrays import backend as _backend  # noqa: E402
 
 
 @pytest.mark.skipif(not _backend.drjit_available(), reason="Dr.Jit LLVM backend unavailable")

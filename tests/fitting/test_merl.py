@@ -187,7 +187,7 @@ def ward_table():
 
 def test_from_half_diff_places_the_half_vector_at_phi_h():
     from plausible.models.merl import from_half_diff, half_diff
-    from plausible.ops import NP
+    from plausible.arrays.ops import NP
 
     th, td, pd, ph = 0.4, 0.7, 1.1, np.array([0.0, 0.9, 2.5, -2.0])
     wi, wo = from_half_diff(th, td, pd, ph)
@@ -232,7 +232,7 @@ def test_a_fit_the_samples_do_not_decide_warns(ward_table):
     # every half vector at phi_h = 0 (h_y = 0): Ward's alpha_y only scales the lobe, as rs does
     from plausible.fitting import UnconstrainedWarning, fit, metrics as M
     from plausible.models.merl import from_half_diff, half_diff
-    from plausible.ops import NP
+    from plausible.arrays.ops import NP
 
     wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
     wi, wo = from_half_diff(*half_diff(NP, tuple(wi.T), tuple(wo.T)))
@@ -248,7 +248,7 @@ def test_the_command_line_prints_the_unconstrained_warning(ward_table, tmp_path)
     from plausible.cli import main
     from plausible.fitting import metrics as M, save_table
     from plausible.models.merl import from_half_diff, half_diff
-    from plausible.ops import NP
+    from plausible.arrays.ops import NP
 
     wi, wo = ward_table.measured_pairs(*M.sample_pairs(ward_table.peak_directions))
     wi, wo = from_half_diff(*half_diff(NP, tuple(wi.T), tuple(wo.T)))       # h_y = 0 everywhere

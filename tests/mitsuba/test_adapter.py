@@ -14,7 +14,7 @@ from plausible.analysis import chi2, direction, energy, reciprocity, sampling_co
 from plausible.analysis.adapters import tolerances
 from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict, load_bsdf_xml
 from plausible.fresnel import dielectric
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 class PyLambert(mi.BSDF):

@@ -102,7 +102,7 @@ def test_a_glossy_only_context_gets_the_specular_lobe():
     bs, _ = b.sample(mi.BSDFContext(), interaction(wi1), mi.Float(rng.random(n)), mi.Point2f(rng.random((2, n))))
     comp, typ = np.array(bs.sampled_component), np.array(bs.sampled_type)
     model = plausible.make("ashikhmin-shirley", **AS)
-    ps = float(model.spec_probability(plausible.ops.NP, (0.0, 0.0, 1.0), model.q))
+    ps = float(model.spec_probability(plausible.arrays.ops.NP, (0.0, 0.0, 1.0), model.q))
     assert abs(np.mean(comp == 0) - ps) < 4 * np.sqrt(ps * (1 - ps) / n)
     assert np.all(typ[comp == 0] == int(F.GlossyReflection)) and np.all(typ[comp == 1] == int(F.DiffuseReflection))
 

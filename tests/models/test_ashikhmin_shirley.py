@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from reference import hooks_agree
+from reference import hooks_agree, mc_albedos as mc_albedo
 from scipy import integrate, optimize, special, stats
 
 from plausible import registry, warps
-from plausible.bxdf import as_directions
+from plausible.directions import as_directions
 from plausible.models.ashikhmin_shirley import (
     AshikhminShirley,
     AshikhminShirleyDiffuse,
@@ -28,7 +28,7 @@ from plausible.models.ashikhmin_shirley import (
     half_vector_density,
     half_vector_exponent,
 )
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 SQRT_HALF = math.sqrt(0.5)
 
@@ -45,17 +45,6 @@ def hemisphere(rng, n):
 def direction(theta_deg, phi_deg=0.0):
     t, p = math.radians(theta_deg), math.radians(phi_deg)
     return np.array([math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)])
-
-
-def mc_albedo(model, wi, n, seed):
-    """Monte Carlo albedo with the model's own sampler: (mean, standard error)
-    of the channel-mean weight, for each leading index of ``wi`` (k, 3)."""
-    wi = np.atleast_2d(wi)[:, None, :]
-    u = np.random.default_rng(seed).random((wi.shape[0], n, 3))
-    w = model.sample(wi, u).weight
-    if w.ndim == 3:
-        w = w.mean(axis=-1)
-    return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)
 
 
 def normal_incidence_albedo_truth(nu, nv):

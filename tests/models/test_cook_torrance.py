@@ -13,7 +13,7 @@ from reference import mc_albedo_at as mc_albedo
 import plausible
 from plausible import warps
 from plausible.models.cook_torrance import beckmann_d
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 ANGLES = [0.0, 60.0, 80.0, 85.0, 89.0, 89.9, 89.99]

@@ -13,7 +13,7 @@ from reference import (check_drjit, check_reciprocal, check_sampling, chi2_sampl
 
 import plausible
 from plausible import warps
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 def gltf(**kw):
@@ -218,3 +218,55 @@ def test_numpy_and_drjit_agree(kw):
 def test_bad_parameters_are_named_with_their_range(kw, text):
     with pytest.raises(ValueError, match=re.escape(text)):
         gltf(**kw)
+
+
+def test_the_shader_trace_takes_max_value_over_the_uniform_channels():
+    # exported with uniforms, specular_color is a vec3 the shader reduces itself: the trace must
+    # equal NumPy for a colour whose largest channel is not the first
+    from plausible.arrays import symbolic
+    from plausible.export.shader import _symbolic_params, uniform_params
+
+    m = gltf(base_color=[0.9, 0.5, 0.2], specular=0.7, specular_color=[0.5, 3.0, 1.0], roughness=0.4)
+    specs = uniform_params(m, True)
+    p, _ = _symbolic_params(m, specs)
+    wi_s, wo_s = symbolic.direction("wi"), symbolic.direction("wo")
+    graph = symbolic.trace(lambda: m._f(symbolic.SYM, wi_s, wo_s, p))
+    rng = np.random.default_rng(5)
+    wi, wo = (np.abs(rng.normal(size=(300, 3))) for _ in range(2))
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True); wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    env = {f"{d}.{c}": a[:, k] for d, a in (("wi", wi), ("wo", wo)) for k, c in enumerate("xyz")}
+    for s in specs:
+        v = m.params[s.name]
+        env.update({f"{s.name}.{c}": float(np.broadcast_to(v, 3)[k]) for k, c in enumerate("xyz")}
+                   if s.kind == "color" else {s.name: float(v)})
+    got = np.asarray(symbolic.evaluate(graph, env), dtype=float)
+    np.testing.assert_allclose(got, m.eval(wi, wo), rtol=1e-10)
+    # the red channel depends on the green one, the largest (a smaller green changes red)
+    other = gltf(base_color=[0.9, 0.5, 0.2], specular=0.7, specular_color=[0.5, 1.0, 1.0], roughness=0.4)
+    assert np.max(np.abs(other.eval(wi, wo)[:, 0] / m.eval(wi, wo)[:, 0] - 1)) > 1e-3
+
+
+# -- sweeps (slow) ----------------------------------------------------------------------
+
+@pytest.mark.slow
+@pytest.mark.parametrize("roughness", [0.05, 0.2, 0.5, 0.8, 1.0])
+@pytest.mark.parametrize("strength", [0.0, 0.5, 1.0])
+def test_sweep_metal_albedo_below_one_and_sampler_chi_square(roughness, strength):
+    m = gltf(base_color=1.0, metallic=1.0, roughness=roughness, anisotropy_strength=strength,
+             anisotropy_rotation=0.5)
+    for t in (0.0, 30.0, 60.0, 80.0, 89.0):
+        assert plausible.albedo(m, from_angles(t, 40.0)).value <= 1.0 + 1e-6
+    if roughness >= 0.2:     # sharper lobes than the 10 x 20 cells of the reference test resolve
+        for t in (0.0, 45.0, 80.0):
+            assert chi2_sampler_pvalue(m, from_angles(t, 40.0), n=50_000, sub=40) > 1e-4
+
+
+@pytest.mark.slow
+def test_sweep_appendix_b_at_random_pairs():
+    rng = np.random.default_rng(11)
+    for _ in range(40):
+        base, metallic, roughness = rng.uniform(0, 1), rng.uniform(0, 1), rng.uniform(0.05, 1)
+        m = gltf(base_color=base, metallic=metallic, roughness=roughness)
+        a, b = rng.normal(size=(2, 3))
+        wi, wo = np.abs(a) / np.linalg.norm(a), np.abs(b) / np.linalg.norm(b)
+        assert m.eval(wi, wo) == pytest.approx(spec_appendix_b(wi, wo, base, metallic, roughness), rel=1e-11)

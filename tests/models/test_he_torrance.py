@@ -13,7 +13,7 @@ import pytest
 import plausible
 from plausible import special
 from plausible.models import he_torrance as HT
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 # -- the independent reference -------------------------------------------------------

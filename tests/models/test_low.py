@@ -10,7 +10,7 @@ from scipy import integrate
 
 import plausible
 from plausible.models import low as L
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 from bbm_reference import cook_fresnel, lowmicrofacetfit, lowsmooth
 

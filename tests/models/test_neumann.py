@@ -9,7 +9,7 @@ from reference import mc_albedo_at as mc_albedo
 
 import plausible
 from plausible import fresnel
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 def neumann_albedo(n, theta_i, c=None, N=300):

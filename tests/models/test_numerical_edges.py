@@ -35,7 +35,7 @@ def test_pumped_up_tables_of_nearby_exponents_are_not_shared():
 def test_lafortune_pdf_of_a_subnormal_lobe_is_the_same_on_both_backends():
     # rho |C wi|^n = 1e-10 * 0.1^300 = 1e-310, a float64 subnormal: Dr.Jit flushed it to zero
     # (pdf 0, every sample lost) while NumPy kept it; the mixture is normalised by its largest weight
-    from plausible.backend import drjit_available
+    from plausible.arrays.backend import drjit_available
 
     m = plausible.make("lafortune", lobes=[(-1.0, -1.0, 0.1, 300.0, 1e-10)], rd=0.0)
     wi = np.array([0.0, 0.0, 1.0])

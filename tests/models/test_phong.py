@@ -104,7 +104,7 @@ def test_blinn_normalisation_gives_unit_albedo_at_normal_incidence(n):
 
 def test_blinn_norm_closed_form_special_values():
     from plausible.models.phong import blinn_norm
-    from plausible.ops import NP
+    from plausible.arrays.ops import NP
 
     assert blinn_norm(NP, 0.0) == pytest.approx(1 / math.pi)                     # Lambertian
     assert blinn_norm(NP, 2.0) == pytest.approx(4 * 6 / (8 * math.pi * 2.5))     # (n+2)(n+4)/(8 pi (n + 1/2))

@@ -18,7 +18,7 @@ import plausible
 from plausible.analysis import albedo, direction
 from plausible.integrals import cache
 from plausible.models import pumped_up as pu
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 from plausible.tables import AngleTable
 
 PHONG = "reciprocal-phong:ks=1:n=20"
@@ -364,7 +364,7 @@ def test_two_dimensional_table_interpolates_in_azimuth_and_through_the_normal():
 
 def test_table_lookup_is_the_same_on_drjit():
     dr = pytest.importorskip("drjit")
-    from plausible.ops import drjit_ops
+    from plausible.arrays.ops import drjit_ops
 
     ops = drjit_ops(dr.llvm.Float64)
     rng = np.random.default_rng(1)

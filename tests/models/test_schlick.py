@@ -22,7 +22,7 @@ from reference import TWO_PI, chi2_sampler_pvalue, hooks_agree, from_angles, qua
 
 import plausible
 from plausible.models import schlick as S
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 

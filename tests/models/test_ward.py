@@ -11,7 +11,7 @@ from test_cook_torrance import ANGLES
 
 import plausible
 from plausible import warps
-from plausible.ops import NP
+from plausible.arrays.ops import NP
 
 
 def ward(**kw):

@@ -43,8 +43,10 @@ import sys
 
 import numpy as np
 
-from ..bxdf import CHUNK, Sample, _as_unit_interval, as_directions
+from ..bxdf import Sample
+from ..text import shorten
 from ..vec import HORIZON
+from .foreign import ForeignBxDF
 
 __all__ = ["CallableBxDF", "as_bxdf", "load_python", "tolerances"]
 
@@ -94,7 +96,7 @@ def as_bxdf(x):
     if callable(x) or callable(getattr(x, "eval", None)):
         return CallableBxDF(x)
     raise TypeError(f"model must be a registered model, a model spec string, a mitsuba.BSDF, or a callable "
-                    f"f(wi, wo) (optionally with pdf and sample); got {type(x).__name__}: {_short_repr(x)}")
+                    f"f(wi, wo) (optionally with pdf and sample); got {type(x).__name__}: {shorten(repr(x))}")
 
 
 def _is_contract(x) -> bool:
@@ -118,11 +120,6 @@ def _is_mitsuba_bsdf(x) -> bool:
         return False
 
 
-def _short_repr(x, n=60):
-    r = repr(x)
-    return r if len(r) <= n else r[:n - 3] + "..."
-
-
 def load_python(target: str):
     """The object named by ``"package.module:name"`` (``name`` may be dotted).
 
@@ -144,7 +141,7 @@ def load_python(target: str):
     return obj
 
 
-class CallableBxDF:
+class CallableBxDF(ForeignBxDF):
     """The contract around plain Python callables.
 
     ``f(wi, wo)``: the BRDF without the cosine, on NumPy arrays of shape
@@ -208,43 +205,22 @@ class CallableBxDF:
             raise ValueError(f"pdf(wi, wo) of {self.name} must return shape ({len(wi)},), got {v.shape}")
         return v
 
-    def _rows(self, wi, wo):
-        wi = as_directions("wi", wi)
-        wo = as_directions("wo", wo)
-        shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
-        a = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
-        b = np.broadcast_to(wo, shape + (3,)).reshape(-1, 3)
-        return a, b, shape
-
-    def _over_upper(self, fn, a, b, out_tail):
-        """``fn`` on the pairs with both directions above the horizon, zero elsewhere, by chunks."""
-        out = np.zeros((len(a),) + out_tail)
-        up = np.nonzero((a[:, 2] > HORIZON) & (b[:, 2] > HORIZON))[0]
-        for s in range(0, len(up), CHUNK):
-            k = up[s:s + CHUNK]
-            out[k] = fn(np.ascontiguousarray(a[k]), np.ascontiguousarray(b[k]))
-        return out
-
     # -- the contract ------------------------------------------------------------------
-    def eval(self, wi, wo):
-        a, b, shape = self._rows(wi, wo)
-        tail = (self.channels,) if self.channels else ()
-        return self._over_upper(self._call_f, a, b, tail).reshape(shape + tail)
+    def _value(self, a, b):
+        return self._call_f(a, b)
+
+    def _density(self, a, b):
+        return self._call_pdf(a, b)
 
     def pdf(self, wi, wo):
         if self._pdf is None:
             raise NotImplementedError(f"{self.name}: no pdf given")
-        a, b, shape = self._rows(wi, wo)
-        return self._over_upper(self._call_pdf, a, b, ()).reshape(shape)
+        return super().pdf(wi, wo)
 
     def sample(self, wi, u) -> Sample:
         if self._sample is None or self._pdf is None:
             raise NotImplementedError(f"{self.name}: {self.not_applicable['sampling']}")
-        wi = as_directions("wi", wi)
-        u = _as_unit_interval(u)
-        shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
-        a = np.ascontiguousarray(np.broadcast_to(wi, shape + (3,)).reshape(-1, 3))
-        uu = np.ascontiguousarray(np.broadcast_to(u, shape + (3,)).reshape(-1, 3))
+        a, uu, shape = self._sample_rows(wi, u)
         out = self._sample(a, uu)
         weight = pdf = None
         if isinstance(out, tuple) and len(out) == 3:
@@ -275,4 +251,4 @@ class CallableBxDF:
     def peak_directions(self, wi):
         if self._peaks is not None:
             return [np.asarray(p, dtype=np.float64) for p in self._peaks(wi)]
-        return [np.array([-wi[0], -wi[1], wi[2]])]
+        return super().peak_directions(wi)

@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..text import jsonable
-from ..integrals.albedo import pdf_phi_sums
+from ..integrals.albedo import pdf_phi_sums_many
 from ..integrals.quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
 
 __all__ = ["AdaptiveBinning", "BINNINGS", "Cells", "Chi2Result", "FixedBinning", "chi2", "sidak"]
@@ -170,25 +170,33 @@ def _adaptive_cells(model, wi, n_theta, n_phi, m):
     mass = model.pdf(wi, pilot.wo) * pilot.weight
     phi_lo, phi_hi = phi0 - math.pi, phi0 + math.pi
     t_edges = _quantile_edges(pilot.theta, mass.sum(axis=1), 0.0, HALF_PI, n_theta)
-    cells = []
+    bands = []      # per band: (ta, tb, phi edges, theta breaks, phi breaks)
     for b in range(len(t_edges) - 1):
         ta, tb = t_edges[b], t_edges[b + 1]
         sel = (pilot.theta >= ta) & (pilot.theta < tb) if b < len(t_edges) - 2 else (pilot.theta >= ta)
         p_edges = _quantile_edges(pilot.phi, mass[sel].sum(axis=0), phi_lo, phi_hi, n_phi)
         tbr = np.unique(np.concatenate([[ta, tb], tb_glob[(tb_glob > ta) & (tb_glob < tb)]]))
         pbr = np.unique(np.concatenate([p_edges, pb_glob[(pb_glob > phi_lo) & (pb_glob < phi_hi)]]))
-        exp_b = _band_expected(model, wi, tbr, pbr, p_edges, m)
-        # Refine (midpoints in both angles) until the cell integrals settle: a lobe
-        # concentrated along a curve (nu = 0, nv = 10^4) is not a point the graded
-        # breakpoints can aim at.
-        for _ in range(4):
-            tbr, pbr = _bisect(tbr), _bisect(pbr)
-            fine = _band_expected(model, wi, tbr, pbr, p_edges, m)
-            settled = np.all(np.abs(fine - exp_b) <= 1e-4 * max(exp_b.sum(), 1e-300) / len(exp_b) + 1e-12)
-            exp_b = fine
-            if settled:
-                break
-        cells.append((ta, tb, p_edges, exp_b))
+        bands.append([ta, tb, p_edges, tbr, pbr])
+    expected = _bands_expected(model, wi, bands, m)
+    # Refine (midpoints in both angles) until the cell integrals settle: a lobe
+    # concentrated along a curve (nu = 0, nv = 10^4) is not a point the graded
+    # breakpoints can aim at.  Every band still refining is integrated in one call.
+    active = list(range(len(bands)))
+    for _ in range(4):
+        if not active:
+            break
+        for b in active:
+            bands[b][3], bands[b][4] = _bisect(bands[b][3]), _bisect(bands[b][4])
+        fine = _bands_expected(model, wi, [bands[b] for b in active], m)
+        still = []
+        for b, f in zip(active, fine):
+            e = expected[b]
+            if not np.all(np.abs(f - e) <= 1e-4 * max(e.sum(), 1e-300) / len(e) + 1e-12):
+                still.append(b)
+            expected[b] = f
+        active = still
+    cells = [(ta, tb, p_edges, e) for (ta, tb, p_edges, _, _), e in zip(bands, expected)]
     return t_edges, cells, phi0
 
 
@@ -196,13 +204,17 @@ def _bisect(b):
     return np.sort(np.concatenate([b, 0.5 * (b[:-1] + b[1:])]))
 
 
-def _band_expected(model, wi, tbr, pbr, p_edges, m):
-    """Integral of the pdf over each cell ``[tbr[0], tbr[-1]] x [p_edges[j], p_edges[j+1]]``."""
-    tn, tw = panel_rule(tbr, m)
-    pn, pw = panel_rule(pbr, m)
-    per_phi = pdf_phi_sums(model, wi, tn, tw * np.sin(tn), pn) * pw
-    idx = np.clip(np.searchsorted(p_edges, pn, side="right") - 1, 0, len(p_edges) - 2)
-    return np.bincount(idx, weights=per_phi, minlength=len(p_edges) - 1)
+def _bands_expected(model, wi, bands, m):
+    """Integral of the pdf over each cell ``[tbr[0], tbr[-1]] x [p_edges[j], p_edges[j+1]]``
+    of every band ``(ta, tb, p_edges, tbr, pbr)`` (all bands in one
+    :func:`~plausible.integrals.albedo.pdf_phi_sums_many` call)."""
+    rules = [(panel_rule(tbr, m), panel_rule(pbr, m)) for _, _, _, tbr, pbr in bands]
+    sums = pdf_phi_sums_many(model, wi, [(tn, tw * np.sin(tn), pn) for (tn, tw), (pn, _) in rules])
+    out = []
+    for (_, _, p_edges, _, _), (_, (pn, pw)), per_phi in zip(bands, rules, sums):
+        idx = np.clip(np.searchsorted(p_edges, pn, side="right") - 1, 0, len(p_edges) - 2)
+        out.append(np.bincount(idx, weights=per_phi * pw, minlength=len(p_edges) - 1))
+    return out
 
 
 def _fixed_cells(model, wi, n_theta, n_phi, ires=4):

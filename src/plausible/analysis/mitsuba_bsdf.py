@@ -56,9 +56,11 @@ import math
 
 import numpy as np
 
-from ..bxdf import CHUNK, Sample, _as_array, _as_unit_interval, _check_directions
-from ..mitsuba import VARIANTS, ensure_variant
+from ..bxdf import Sample
+from ..directions import CHUNK, as_array, check_directions
+from ..mitsuba.variant import VARIANTS, ensure_variant
 from ..vec import HORIZON
+from .foreign import ForeignBxDF
 
 __all__ = ["MitsubaBSDF", "load_bsdf_dict", "load_bsdf_xml"]
 
@@ -134,7 +136,7 @@ def _flags(mi, bsdf):
     return comps, smooth, delta, trans
 
 
-class MitsubaBSDF:
+class MitsubaBSDF(ForeignBxDF):
     """The contract of :mod:`plausible.bxdf` around a ``mitsuba.BSDF`` (see the module docstring).
 
     ``mode``: ``"radiance"`` or ``"importance"``; ``side``: ``"front"`` or ``"back"``;
@@ -240,37 +242,19 @@ class MitsubaBSDF:
         return np.asarray(self.bsdf.pdf(self._ctx(), self._si(wi), self._vec(wo)).numpy(), dtype=np.float64)
 
     # -- the contract --------------------------------------------------------------------------
-    def _pairs(self, wi, wo):
-        wi = _as_float32_directions("wi", wi)
-        wo = _as_float32_directions("wo", wo)
-        shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
-        return (np.broadcast_to(wi, shape + (3,)).reshape(-1, 3), np.broadcast_to(wo, shape + (3,)).reshape(-1, 3),
-                shape)
+    def _directions(self, name, w):
+        return _as_float32_directions(name, w)
 
-    def _upper(self, fn, a, b, tail):
-        out = np.zeros((len(a),) + tail)
-        up = np.nonzero((a[:, 2] > HORIZON) & (b[:, 2] > HORIZON))[0]
-        for s in range(0, len(up), CHUNK):
-            k = up[s:s + CHUNK]
-            out[k] = fn(a[k], b[k])
-        return out
+    def _value(self, a, b):
+        return self._mi_eval(a, b)
 
-    def eval(self, wi, wo):
-        a, b, shape = self._pairs(wi, wo)
-        tail = (self.channels,) if self.channels else ()
-        return self._upper(self._mi_eval, a, b, tail).reshape(shape + tail)
-
-    def pdf(self, wi, wo):
-        a, b, shape = self._pairs(wi, wo)
-        return self._upper(self._mi_pdf, a, b, ()).reshape(shape)
+    def _density(self, a, b):
+        return self._mi_pdf(a, b)
 
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
-        wi = _as_float32_directions("wi", wi)
-        u = _as_unit_interval(u)
-        shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
-        a = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
-        uu = np.minimum(np.broadcast_to(u, shape + (3,)).reshape(-1, 3), 1 - 2.0 ** -24).astype(np.float32)
+        a, uu, shape = self._sample_rows(wi, u)
+        uu = np.minimum(uu, 1 - 2.0 ** -24).astype(np.float32)
         tail = (self.channels,) if self.channels else ()
         wo = np.zeros((len(a), 3))
         wo[:, 2] = -1.0
@@ -297,9 +281,6 @@ class MitsubaBSDF:
             pdf[s:e] = np.where(ok, p, 0.0)
             weight[s:e] = np.where(ok[:, None] if tail else ok, ww, 0.0)
         return Sample(wo.reshape(shape + (3,)), weight.reshape(shape + tail), pdf.reshape(shape))
-
-    def peak_directions(self, wi):
-        return [np.array([-wi[0], -wi[1], wi[2]])]
 
     # -- beyond the contract: views, notes, delta lobes -------------------------------------------
     def with_(self, **kw):
@@ -392,11 +373,11 @@ def _unit32(w, nrm):
 
 
 def _as_float32_directions(name, w):
-    """Validated directions (as :func:`plausible.bxdf.as_directions`), normalised only
+    """Validated directions (as :func:`plausible.directions.as_directions`), normalised only
     where they are not unit vectors to float32 precision: a direction the adapter
     returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
-    a = _as_array(name, w)
-    _check_directions(name, a)
+    a = as_array(name, w)
+    check_directions(name, a)
     return _unit32(a, np.sqrt(np.sum(a * a, axis=-1)))
 
 

@@ -45,7 +45,7 @@ from ..models.low import LowMicrofacet, LowSmooth
 from ..models.published import AshikhminShirleyDielectric, CookTorranceWide, NganBlinnPhong
 from ..models.sum import Sum
 from ..models.ward import Ward
-from ..ops import PI
+from ..arrays.ops import PI
 
 NGAN = "A. Ngan, F. Durand, W. Matusik, Experimental analysis of BRDF models, EGSR 2005"
 LOW = ("J. Löw, J. Kronander, A. Ynnerman, J. Unger, BRDF models for accurate and efficient "

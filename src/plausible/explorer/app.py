@@ -146,17 +146,8 @@ def _host_ok(value: str, names: set, port: int | None) -> bool:
     return p == str(port) or (p is None and port == 80)
 
 
-def create_app(host: str | None = None, port: int | None = None, budget: Budget = Budget()) -> FastAPI:
-    """The explorer application (serve it with uvicorn; :func:`plausible.explorer.serve`).
-    ``host``, ``port``: the address it is served on (``Host`` and ``Origin`` must
-    name it; any port of this machine when ``port`` is None); ``budget``: the
-    limits of one request (:class:`Budget`)."""
-    app = FastAPI(title="plausible explorer", docs_url=None, redoc_url=None, openapi_url=None)
-    app.mount("/static", StaticFiles(directory=STATIC), name="static")
-    catalogue = views.model_catalogue()
-    worker = Worker()
-    names = _allowed_hosts(host, port)
-    app.state.budget = budget
+def _guard(app, names, port):
+    """Refuse requests to other hosts or from other origins; errors as JSON."""
 
     @app.middleware("http")
     async def same_origin(request: Request, call_next):
@@ -180,6 +171,71 @@ def create_app(host: str | None = None, port: int | None = None, budget: Budget 
     async def http_error(request: Request, exc: HttpError):
         return JSONResponse({"error": str(exc)}, status_code=exc.status)
 
+
+async def _body_of(request: Request, budget: Budget) -> dict:
+    """The JSON object of the body, within the size and time ``budget``."""
+    size = request.headers.get("content-length")
+    if size is not None and size.isdigit() and int(size) > budget.body_bytes:
+        raise HttpError(413, f"request body of {size} bytes: at most {budget.body_bytes} allowed")
+    chunks, total = [], 0
+
+    async def read():
+        nonlocal total
+        async for chunk in request.stream():
+            total += len(chunk)
+            if total > budget.body_bytes:
+                raise HttpError(413, f"request body over {budget.body_bytes} bytes")
+            chunks.append(chunk)
+
+    try:
+        await asyncio.wait_for(read(), budget.body_seconds)
+    except asyncio.TimeoutError:
+        raise HttpError(408, f"request body not received within {budget.body_seconds:g} s") from None
+    try:
+        body = json.loads(b"".join(chunks) or b"null")
+    except (ValueError, UnicodeDecodeError) as e:
+        raise ValueError(f"request body must be JSON: {e}") from None
+    if not isinstance(body, dict) or "model" not in body:
+        raise ValueError('request body must be {"model": NAME, "params": {...}}')
+    params = body.get("params")
+    if params is not None and not isinstance(params, dict):
+        raise ValueError(f'"params" must be an object {{"name": value, ...}}, got {type(params).__name__} '
+                         f'{json.dumps(params)[:60]}')
+    if not isinstance(body["model"], str):
+        raise ValueError(f'"model" must be a model name (a string), got {json.dumps(body["model"])[:60]}')
+    return body
+
+def _theta(body) -> float:
+    """The incidence ``theta_i`` of a request body, in degrees (default 30)."""
+    t = body.get("theta_i", 30.0)
+    if isinstance(t, bool) or not isinstance(t, (int, float)):
+        raise ValueError(f"theta_i must be a number in [0, 90] degrees, got {json.dumps(t)[:40]}")
+    if not 0.0 <= t <= 90.0:
+        raise ValueError(f"theta_i must lie in [0, 90] degrees, got {t}")
+    return float(t)
+
+def _text(body, key, default) -> str:
+    """The string ``body[key]`` (at most 64 characters)."""
+    v = body.get(key, default)
+    if not isinstance(v, str) or len(v) > 64:
+        raise ValueError(f'"{key}" must be a string of at most 64 characters, got {json.dumps(v)[:40]}')
+    return v
+
+
+def create_app(host: str | None = None, port: int | None = None, budget: Budget = Budget()) -> FastAPI:
+    """The explorer application (serve it with uvicorn; :func:`plausible.explorer.serve`).
+    ``host``, ``port``: the address it is served on (``Host`` and ``Origin`` must
+    name it; any port of this machine when ``port`` is None); ``budget``: the
+    limits of one request (:class:`Budget`)."""
+    app = FastAPI(title="plausible explorer", docs_url=None, redoc_url=None, openapi_url=None)
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
+    catalogue = views.model_catalogue()
+    worker = Worker()
+    names = _allowed_hosts(host, port)
+    app.state.budget = budget
+
+    _guard(app, names, port)
+
     @app.get("/")
     def index():
         return FileResponse(STATIC / "index.html")
@@ -187,53 +243,6 @@ def create_app(host: str | None = None, port: int | None = None, budget: Budget 
     @app.get("/api/models")
     def models():
         return catalogue
-
-    async def body_of(request: Request) -> dict:
-        """The JSON object of the body, within the size and time budget."""
-        size = request.headers.get("content-length")
-        if size is not None and size.isdigit() and int(size) > budget.body_bytes:
-            raise HttpError(413, f"request body of {size} bytes: at most {budget.body_bytes} allowed")
-        chunks, total = [], 0
-
-        async def read():
-            nonlocal total
-            async for chunk in request.stream():
-                total += len(chunk)
-                if total > budget.body_bytes:
-                    raise HttpError(413, f"request body over {budget.body_bytes} bytes")
-                chunks.append(chunk)
-
-        try:
-            await asyncio.wait_for(read(), budget.body_seconds)
-        except asyncio.TimeoutError:
-            raise HttpError(408, f"request body not received within {budget.body_seconds:g} s") from None
-        try:
-            body = json.loads(b"".join(chunks) or b"null")
-        except (ValueError, UnicodeDecodeError) as e:
-            raise ValueError(f"request body must be JSON: {e}") from None
-        if not isinstance(body, dict) or "model" not in body:
-            raise ValueError('request body must be {"model": NAME, "params": {...}}')
-        params = body.get("params")
-        if params is not None and not isinstance(params, dict):
-            raise ValueError(f'"params" must be an object {{"name": value, ...}}, got {type(params).__name__} '
-                             f'{json.dumps(params)[:60]}')
-        if not isinstance(body["model"], str):
-            raise ValueError(f'"model" must be a model name (a string), got {json.dumps(body["model"])[:60]}')
-        return body
-
-    def _theta(body):
-        t = body.get("theta_i", 30.0)
-        if isinstance(t, bool) or not isinstance(t, (int, float)):
-            raise ValueError(f"theta_i must be a number in [0, 90] degrees, got {json.dumps(t)[:40]}")
-        if not 0.0 <= t <= 90.0:
-            raise ValueError(f"theta_i must lie in [0, 90] degrees, got {t}")
-        return float(t)
-
-    def _text(body, key, default):
-        v = body.get(key, default)
-        if not isinstance(v, str) or len(v) > 64:
-            raise ValueError(f'"{key}" must be a string of at most 64 characters, got {json.dumps(v)[:40]}')
-        return v
 
     # the JSON views: route name -> the view of (model, request body); each runs in the worker
     routes = {
@@ -247,7 +256,7 @@ def create_app(host: str | None = None, port: int | None = None, budget: Budget 
     }
 
     async def compute(request: Request, view):
-        body = await body_of(request)
+        body = await _body_of(request, budget)
         return await worker.run(lambda: view(views.build(body["model"], body.get("params") or {}), body),
                                 budget.seconds)
 

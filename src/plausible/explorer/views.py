@@ -26,7 +26,6 @@ import numpy as np
 
 from .. import registry
 from ..analysis import albedo_curve, direction
-from ..params import parse_value
 
 #: An albedo counts as energy gained where it exceeds ``1 + ENERGY_TOL`` by more than its error bound.
 ENERGY_TOL = 1e-6
@@ -50,21 +49,6 @@ def _bounds(p, value=None):
     return lo, hi
 
 
-def _jsonable_value(v):
-    from ..bxdf import BxDF
-    from ..registry import spec_of
-
-    if isinstance(v, BxDF):
-        return "[" + spec_of(v) + "]"
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, (list, tuple)):
-        if v and isinstance(v[0], (list, tuple)):
-            return ";".join(",".join(f"{float(x):g}" for x in g) for g in v) + ";"
-        return [float(x) for x in v]
-    return v
-
-
 def param_spec(p, value=None) -> dict:
     """One parameter as the page needs it: ``kind`` is ``scalar`` (a slider),
     ``color`` (a colour picker plus a grey slider), ``choice`` (a menu) or
@@ -74,7 +58,7 @@ def param_spec(p, value=None) -> dict:
     kind = p.kind if p.kind in SLIDER_KINDS + ("choice",) else "text"
     lo, hi = _bounds(p, value)
     return {"name": p.name, "kind": kind, "doc": p.doc,
-            "default": _jsonable_value(p.default if value is None else value), "lo": lo, "hi": hi,
+            "default": p.to_json(p.default if value is None else value), "lo": lo, "hi": hi,
             "range": p.range_text(), "scale": _scale(p), "integer": bool(p.integer),
             "choices": p.options()}
 
@@ -98,17 +82,12 @@ def build(name: str, params: dict | None = None):
     of numbers, strings in the command line's syntax).  Raises the model's own
     :class:`ValueError` (parameter, range, value) for anything out of range."""
     info = registry.info(name)
-    kinds = {p.name: p.kind for p in info.params}
+    specs = {p.name: p for p in info.params}
     ps = {}
     for k, v in (params or {}).items():
-        if k not in kinds:
-            raise ValueError(f"{name}: unknown parameter {k!r}; allowed: {', '.join(kinds)}")
-        if isinstance(v, str) and kinds[k] not in ("choice",):
-            v = v.strip()
-            if kinds[k] == "model" and v.startswith("[") and v.endswith("]"):
-                v = v[1:-1]
-            v = v if kinds[k] == "model" else parse_value(v)
-        ps[k] = v
+        if k not in specs:
+            raise ValueError(f"{name}: unknown parameter {k!r}; allowed: {', '.join(specs)}")
+        ps[k] = specs[k].parse(v) if isinstance(v, str) else v
     return registry.make(name, **ps)
 
 

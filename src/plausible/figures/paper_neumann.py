@@ -120,12 +120,20 @@ def _greek(label: str) -> str:
 def total_albedo(model, wi) -> float:
     """The directional albedo including the model's delta lobes (He-Torrance's coherent
     specular part, reported by ``delta_lobes``), channel mean."""
-    from plausible.analysis import albedo
+    return float(total_albedos(model, [wi])[0])
 
-    a = float(np.mean(albedo(model, wi).value))
+
+def total_albedos(model, wis) -> np.ndarray:
+    """:func:`total_albedo` at every incidence of ``wis``, the albedos integrated
+    together (:func:`plausible.analysis.albedos`: each refined to its own bound, as
+    one at a time)."""
+    from plausible.analysis import albedos
+
+    wis = np.asarray(wis, dtype=np.float64)
+    a = np.array([float(np.mean(r.value)) for r in albedos(model, wis)])
     lobes = getattr(model, "delta_lobes", None)
     if lobes is not None:
-        a += sum(float(np.mean(w)) for _, w in lobes(np.asarray(wi, dtype=np.float64)))
+        a += np.array([sum(float(np.mean(w)) for _, w in lobes(wi)) for wi in wis])
     return a
 
 
@@ -141,14 +149,15 @@ def fig1(ctx, models):
     # 90 - theta from 10 degrees down to cos(theta) = 1e-9 (5.7e-8 degrees), log-spaced
     near = np.geomspace(10.0, math.degrees(math.asin(1e-9)), 19 if not ctx.quick else 6)
     ctx.steps(len(specs) * (len(th) + len(near) + len(RATE_COS)))
-    curves, tails = {}, {}
+    curves, tails, rates = {}, {}, {}
     for label, m in specs.items():
-        curves[label] = np.asarray(albedo_curve(m, th, progress=within(ctx.tick)).value)
-        if getattr(m, "delta_lobes", None) is not None:
-            curves[label] = np.array([total_albedo(m, [math.sin(t), 0.0, math.cos(t)]) for t in th])
-        tails[label] = np.array([total_albedo(m, [math.cos(math.radians(d)), 0.0, math.sin(math.radians(d))])
-                                 for d in near])
-        ctx.tick(len(near))
+        # every incidence of the model in one call: the curve, the approach to the horizon, the rates
+        wis = [[math.sin(t), 0.0, math.cos(t)] for t in th] \
+            + [[math.cos(math.radians(d)), 0.0, math.sin(math.radians(d))] for d in near] \
+            + [[math.sqrt(1 - c * c), 0.0, c] for c in RATE_COS]
+        a = total_albedos(m, wis)
+        curves[label], tails[label], rates[label] = np.split(a, [len(th), len(th) + len(near)])
+        ctx.tick(len(wis))
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10.5, 4.0))
     # Ward is dashed: up to 80 degrees it lies on Phong (n = 150 and m = 0.1 are the same width)
     style = {label: dict(ls="--", lw=1.8) if label.startswith("Ward") else {} for label in curves}
@@ -174,8 +183,7 @@ def fig1(ctx, models):
     ctx.table("albedo", {"theta_deg": np.degrees(th), **curves})
     ctx.table("albedo-near-horizon", {"90_minus_theta_deg": near, **tails})
     for label, m in specs.items():
-        rate = [total_albedo(m, [math.sqrt(1 - c * c), 0.0, c]) for c in RATE_COS]
-        ctx.tick(len(RATE_COS))
+        rate = list(rates[label])
         ctx.measure(f"{label}: albedo at 0 / 80 / 89.9 deg", float(curves[label][0]),
                     note=f"{curves[label][0]:.4f} / {float(np.interp(80.0, np.degrees(th), curves[label])):.4f} / "
                          f"{curves[label][-1]:.4f}; at cos = 1e-5 / 1e-7 / 1e-9: "
@@ -673,7 +681,7 @@ def perceptual_checks(least_squares: dict, perceptual: dict) -> list:
         "corresponds to the logarithmic characteristics of the human vision system.\u201d",
         model="neumann-metal", reference="cook-torrance:m=0.2:rs=0.9", thetas_deg=(0.0, 30.0, 60.0, 80.0))
 def perceptual(ctx, model, reference, thetas_deg):
-    from plausible.fitting.fit import as_target, fit
+    from plausible.fitting import as_target, fit
 
     ref = plausible.registry.make_from_spec(reference)
     if ctx.quick:

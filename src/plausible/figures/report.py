@@ -111,17 +111,73 @@ def _dir_mode() -> int:
     return 0o777 & ~mask
 
 
+def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict:
+    """Make the :class:`~plausible.figures.Figure` ``fig`` into ``out/NAME`` (through a
+    partial folder, see the module docstring) and return its ``figure.json``
+    contents.  A figure that raises is recorded as failed with its traceback; the
+    others are unaffected."""
+    name = fig.name
+    d = out / name
+    _remove_partial(out, name)      # left by a run that was killed
+    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out))
+    try:
+        os.chmod(tmp, _dir_mode())      # mkdtemp makes 0700: the figure folder follows the umask
+        ctx = Context(tmp, resolution=resolution, spp=spp, quick=quick,
+                      progress=lambda total, label="", _n=name: start(progress, total, _n))
+        t0 = time.time()
+        m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
+                 key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders)
+        try:
+            fig.fn(ctx, **fig.params)
+            m["status"] = "ok"
+        except Exception:   # a failing figure is reported, the others still run
+            m["status"] = "failed"
+            m["error"] = traceback.format_exc()
+        ctx.finish()
+        m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
+                 seconds=round(time.time() - t0, 1), cached=False)
+        (tmp / "figure.json").write_text(json.dumps(m, indent=1))
+        _replace(tmp, d)
+        tmp = None
+        return m
+    finally:    # interrupted (Ctrl-C): drop the unfinished figure
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _report(console, name, m):
+    if m["status"] != "ok":
+        console.print(f"[red]figure {escape(name)} failed:[/red]\n{escape(m.get('error', ''))}")
+    console.print(f"{escape(name):<22} {m['status']} {m['seconds']} s")
+
+
+def default_jobs() -> int:
+    """Worker processes of ``plausible figures``: the cores this process may use, at
+    most 2 (each figure's kernels and renders use every core already; a second
+    process keeps them busy while the other runs Python and NumPy)."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        n = os.cpu_count() or 1
+    return max(1, min(2, n))
+
+
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
-        progress=None) -> dict:
+        progress=None, jobs: int = 1) -> dict:
     """Make the figures (all, or the names in ``only``) into ``out`` and write
-    ``out/index.html``.  Returns ``{name: figure.json contents}``; each has
-    ``status`` ("ok" or "failed"), ``cached`` and ``seconds``.
+    ``out/index.html``.  Returns ``{name: figure.json contents}`` in report order;
+    each has ``status`` ("ok" or "failed"), ``cached`` and ``seconds``.
 
     ``spp`` / ``resolution`` override the samples per pixel / base image size
     (defaults :data:`plausible.figures.DEFAULT_SPP` / ``DEFAULT_RESOLUTION``);
     ``quick`` uses small ones (the CI mode).  Deterministic: fixed seeds.
     ``progress``: a :mod:`plausible.progress` factory, announced once per figure
     (labelled with its name); a line per figure says how it went.
+
+    ``jobs`` > 1: the figures to make run in that many worker processes
+    (:func:`_run_parallel`, the longest first); each figure is made exactly as in
+    one process (its own seeds, its own folder), so the report is the same, and a
+    line per figure still says how it went as each one finishes.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -130,49 +186,36 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     src = source_hash()
     results = {}
     t_all = time.time()
-    tmp, name = None, ""
+    name = ""
     try:
+        make = []
         for name in todo:
-            fig = FIGURES[name]
-            d = out / name
-            key = input_key(fig, resolution=resolution, spp=spp, quick=quick, src=src)
-            m = None if force else _cached(d, key)
+            key = input_key(FIGURES[name], resolution=resolution, spp=spp, quick=quick, src=src)
+            m = None if force else _cached(out / name, key)
             if m is not None:
                 m["cached"] = True
                 console.print(f"{escape(name):<22} cached")
                 results[name] = m
-                continue
-            _remove_partial(out, name)      # left by a run that was killed
-            tmp = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=out))
-            os.chmod(tmp, _dir_mode())      # mkdtemp makes 0700: the figure folder follows the umask
-            ctx = Context(tmp, resolution=resolution, spp=spp, quick=quick,
-                          progress=lambda total, label="", _n=name: start(progress, total, _n))
-            t0 = time.time()
-            m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
-                     key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders)
-            try:
-                fig.fn(ctx, **fig.params)
-                m["status"] = "ok"
-            except Exception:   # a failing figure is reported, the others still run
-                m["status"] = "failed"
-                m["error"] = traceback.format_exc()
-                console.print(f"[red]figure {escape(name)} failed:[/red]\n{escape(m['error'])}")
-            ctx.finish()
-            m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
-                     seconds=round(time.time() - t0, 1), cached=False)
-            (tmp / "figure.json").write_text(json.dumps(m, indent=1))
-            _replace(tmp, d)
-            tmp = None
-            console.print(f"{escape(name):<22} {m['status']} {m['seconds']} s")
-            results[name] = m
+            else:
+                make.append((name, key))
+        if jobs > 1 and len(make) > 1:
+            _run_parallel(out, make, results, jobs=jobs, resolution=resolution, spp=spp, quick=quick,
+                          console=console, progress=progress)
+        else:
+            for name, key in make:
+                m = _make(FIGURES[name], key, out, resolution=resolution, spp=spp, quick=quick,
+                          progress=progress)
+                _report(console, name, m)
+                results[name] = m
     except KeyboardInterrupt:
-        console.print(f"[yellow]interrupted while making {escape(name)}: it is left as it was before "
-                      f"this run; {len(results)} figures done -> {escape(str(out / 'index.html'))}[/yellow]")
+        busy = name if jobs <= 1 else ", ".join(n for n, _ in make if n not in results)
+        left = "it is left as it was" if "," not in busy else "they are left as they were"
+        console.print(f"[yellow]interrupted while making {escape(busy)}: {left} before this run; "
+                      f"{len(results)} figures done -> {escape(str(out / 'index.html'))}[/yellow]")
         raise
-    finally:    # on any exit: drop the unfinished figure, index what is done
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
+    finally:    # on any exit: index what is done
         _index_all(out, results)
+    results = {n: results[n] for n in todo if n in results}
     total = round(time.time() - t_all, 1)
     failed = [n for n, m in results.items() if m["status"] != "ok"]
     checks = [x for m in results.values() for x in m.get("measurements", []) if "ok" in x]
@@ -181,6 +224,133 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
                   f"{len(failed)} failed) in {total} s; {len(checks) - len(bad)}/{len(checks)} measured "
                   f"checks hold -> {escape(str(out / 'index.html'))}")
     return results
+
+
+# -- worker processes -----------------------------------------------------------------
+
+#: Seconds each figure takes in a default run (2-core machine; from CPU profiles), for the order in
+#: which worker processes take them: the longest first, so that no long figure starts
+#: last.  Only the order depends on these; a figure not listed counts as 5 s, and the
+#: ``seconds`` of a previous run in the output folder take precedence.
+EXPECTED_SECONDS = {"materials-check": 50, "checks": 30, "neumann-fig5": 20, "mitsuba-builtins": 15,
+                    "materials-atlas": 15, "neumann-fig1": 13, "as-convergence": 12, "neumann-fig3": 11,
+                    "neumann-fig8": 11, "as-gold": 9, "as-red-spheres": 9, "as-three-views": 8,
+                    "neumann-perceptual": 8, "notes-cornell": 8, "neumann-fig6": 8, "neumann-fig4": 7,
+                    "as-furnace": 7, "neumann-fig7": 6, "as-lambert-vs-as": 5, "as-cylinder": 4,
+                    "as-half-sphere": 4}
+
+
+def _expected_seconds(out: Path, name: str) -> float:
+    try:
+        return float(json.loads((out / name / "figure.json").read_text())["seconds"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return float(EXPECTED_SECONDS.get(name, 5.0))
+
+
+def _worker(conn, out, resolution, spp, quick):
+    """A worker process: make each figure ``(Figure, key)`` the parent sends on the
+    pipe ``conn`` until it sends None.  Progress and results go back on the same
+    pipe (synchronously, so nothing is lost if the process dies afterwards):
+    ``("start", id, total, label)``, ``("tick", id, n)``, ``("done", figure.json)``."""
+    import itertools
+    import signal
+
+    from ..progress import reporting
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)    # the parent handles Ctrl-C (and ends us)
+    ids = itertools.count()
+
+    def forward(total, label=""):
+        i = next(ids)
+        conn.send(("start", i, int(total), label))
+
+        def tick(n=1):
+            conn.send(("tick", i, int(n)))
+
+        return tick
+
+    with reporting(forward):
+        for fig, key in iter(conn.recv, None):
+            conn.send(("done", _make(fig, key, Path(out), resolution=resolution, spp=spp, quick=quick,
+                                     progress=forward)))
+
+
+def _failed(name, key, error) -> dict:
+    return dict(name=name, key=key, status="failed", error=error, cached=False, seconds=0.0, items=[],
+                measurements=[], notes=[])
+
+
+def _run_parallel(out, make, results, *, jobs, resolution, spp, quick, console, progress):
+    """Make the figures ``make`` (``(name, key)`` pairs) in ``jobs`` worker processes
+    (spawned: a fresh interpreter each, no Dr.Jit state shared), the longest first
+    (:data:`EXPECTED_SECONDS`), each worker given the next figure when it finishes
+    one; fill ``results`` as they finish.  A worker that dies fails the figure it
+    was making (its exit code in the error) and is replaced; on any exit the workers
+    are ended and the partial folders of unfinished figures removed."""
+    import multiprocessing as mp
+    from multiprocessing.connection import wait
+
+    ctx = mp.get_context("spawn")
+    todo = sorted(make, key=lambda nk: -_expected_seconds(out, nk[0]))
+    workers = {}    # connection -> [process, figure name or None, {progress id: tick}]
+
+    def spawn():
+        mine, theirs = ctx.Pipe()
+        p = ctx.Process(target=_worker, args=(theirs, str(out), resolution, spp, quick), daemon=True)
+        p.start()
+        theirs.close()
+        workers[mine] = [p, None, {}]
+        feed(mine)
+
+    def feed(conn):
+        w = workers[conn]
+        if todo:
+            name, key = todo.pop(0)
+            w[1] = name
+            conn.send((FIGURES[name], key))     # the Figure itself: its function pickles by name
+        else:
+            w[1] = None
+            conn.send(None)
+
+    def finish(name, m):
+        _report(console, name, m)
+        results[name] = m
+
+    try:
+        for _ in range(min(jobs, len(todo))):
+            spawn()
+        while workers:
+            for conn in wait(list(workers), timeout=1.0):
+                p, name, ticks = workers[conn]
+                try:
+                    msg = conn.recv()
+                except (EOFError, OSError):     # the worker is gone
+                    p.join()
+                    del workers[conn]
+                    conn.close()
+                    if name is not None:
+                        _remove_partial(out, name)
+                        finish(name, _failed(name, dict(make)[name], "the worker process making this figure "
+                                             f"died (exit code {p.exitcode}; its error, if any, is printed above)"))
+                        if todo:
+                            spawn()
+                    continue
+                if msg[0] == "start":
+                    ticks[msg[1]] = start(progress, msg[2], msg[3])
+                elif msg[0] == "tick":
+                    ticks.get(msg[1], lambda n=1: None)(msg[2])
+                else:
+                    finish(name, msg[1])
+                    ticks.clear()
+                    feed(conn)
+    finally:
+        for conn, (p, name, _) in workers.items():
+            if p.is_alive():
+                p.terminate()
+            p.join(timeout=10)
+            conn.close()
+            if name is not None:
+                _remove_partial(out, name)
 
 
 # -- index.html ---------------------------------------------------------------------

@@ -3,7 +3,8 @@ least-squares metrics and the perceptual metric of Neumann, Neumann &
 Szirmay-Kalos (1999); reading and writing measured BRDFs in the MERL format.
 See docs/fitting.md."""
 
-from .fit import FitResult, Target, UnconstrainedWarning, as_target, evaluate_fit, fit, load_table, save_table
+from .fit import FitResult, UnconstrainedWarning, evaluate_fit, fit
+from .targets import Target, as_target, load_table, save_table
 from ..models.merl import MerlBRDF, read_merl, tabulate, write_merl
 from .metrics import METRICS, errors, objective, sample_pairs
 

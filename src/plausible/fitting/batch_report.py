@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import registry, vec
-from ..ops import NP
+from ..arrays.ops import NP
 from ..plotting import _plt
 from .batch import ERROR_KEYS, load_results
 
@@ -90,7 +90,7 @@ def _bars(target, rows, path):
 
 def _spheres(target, rows, path, size):
     """Target and each fitted model (best metric row per model) as spheres."""
-    from .fit import as_target
+    from .targets import as_target
 
     tgt = as_target(target).model
     if tgt is None:

@@ -11,7 +11,8 @@ import sys
 import time
 
 from .. import registry
-from .fit import as_target, fit
+from .fit import fit
+from .targets import as_target
 
 TARGET = "cook-torrance:m=0.2:rs=0.9"
 MODELS = ("ashikhmin-shirley", "modified-phong", "ward", "neumann-metal")

@@ -181,7 +181,7 @@ def sample_pairs(peaks_of, thetas_deg=THETAS_DEG, azimuths_deg=AZIMUTHS_DEG):
 
 def _rotate_to(local, axis):
     from .. import vec
-    from ..ops import NP
+    from ..arrays.ops import NP
 
     s, t = vec.frame(NP, tuple(float(x) for x in axis))
     s, t = np.array(s), np.array(t)

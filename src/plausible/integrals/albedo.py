@@ -22,8 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import backend as _backend
-from ..bxdf import BxDF, as_directions
+from ..arrays import backend as _backend
+from ..bxdf import BxDF
+from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
 from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
@@ -155,11 +156,12 @@ def _sums(model, kind, rules, requests):
 
 
 def _jit_sums(model, kind, rules, requests, grids):
-    """:func:`plausible.backend.grid_sums`, one launch per rule ``(m, refine)`` (so
-    that the padding to a common grid size stays small)."""
+    """:func:`plausible.backend.grid_sums`, one launch per group of grids of about the
+    same size (:func:`_pad_groups`: the padding to a common size adds at most
+    :data:`PAD_WASTE` - 1 of the nodes; a grazing incidence's grid can be many times
+    the size of a normal one's)."""
     res = [None] * len(requests)
-    for key in sorted({(m, r) for _, m, r in requests}):
-        idx = [k for k, (_, m, r) in enumerate(requests) if (m, r) == key]
+    for idx in _pad_groups([(len(g[0]), len(g[2])) for g in grids]):
         wis = np.array([rules[requests[k][0]].wi for k in idx])
         cols = [_pad([grids[k][c] for k in idx]) for c in range(6)]
         for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
@@ -196,26 +198,89 @@ def _grid_sum(model, kind, wi, grid):
 def pdf_phi_sums(model, wi, theta, theta_w, phi) -> np.ndarray:
     """``sum_i theta_w[i] pdf(wi, wo(theta[i], phi[j]))`` for every ``j``: a tensor
     rule's pdf integrated over ``theta`` at each azimuth node (the chi-square
-    test's cells, :mod:`plausible.analysis.chi2`).  One Dr.Jit launch when the
-    backend rule says so, else ``model.pdf`` on the grid."""
-    theta, theta_w, phi = (np.asarray(x, dtype=np.float64) for x in (theta, theta_w, phi))
+    test's cells, :mod:`plausible.analysis.chi2`): :func:`pdf_phi_sums_many` of one grid."""
+    return pdf_phi_sums_many(model, wi, [(theta, theta_w, phi)])[0]
+
+
+#: Nodes per ``model.pdf`` call of :func:`pdf_phi_sums_many` on NumPy (grids are
+#: grouped up to this size: one call validates many small grids, and no call
+#: holds more than a few hundred megabytes).
+NUMPY_GROUP = 1 << 20
+
+
+def pdf_phi_sums_many(model, wi, grids) -> list:
+    """:func:`pdf_phi_sums` of many grids ``[(theta, theta_w, phi), ...]`` at one
+    incidence ``wi``, computed together: one Dr.Jit launch for all of them when the
+    backend rule says so (for their total node count), else ``model.pdf`` on
+    groups of grids (:data:`NUMPY_GROUP` nodes).  Returns one array per grid,
+    of its ``len(phi)``."""
+    grids = [tuple(np.asarray(x, dtype=np.float64) for x in g) for g in grids]
     wi = np.asarray(wi, dtype=np.float64)
-    n = len(theta) * len(phi)
-    if isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES,
-                                                   kernel="phi-pdf") == "drjit":
+    n = sum(len(t) * len(p) for t, _, p in grids)
+
+    def numpy():
+        return _numpy_phi_sums(model, wi, grids)
+
+    if grids and isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES,
+                                                             kernel="phi-pdf") == "drjit":
         def jit():
-            return _backend.grid_sums(model, "pdf", wi[None, :], theta[None, :], theta_w[None, :],
-                                      phi[None, :], np.ones((1, len(phi))), per_phi=True)[0]
+            out = [None] * len(grids)
+            for idx in _pad_groups([(len(t), len(p)) for t, _, p in grids]):
+                theta, phi = _pad([grids[a][0] for a in idx]), _pad([grids[a][2] for a in idx])
+                theta_w = np.zeros_like(theta)     # zero weight on the padding
+                for row, a in enumerate(idx):
+                    theta_w[row, :len(grids[a][1])] = grids[a][1]
+                sums = _backend.grid_sums(model, "pdf", np.repeat(wi[None, :], len(idx), axis=0), theta, theta_w,
+                                          phi, np.ones_like(phi), per_phi=True)
+                for row, a in enumerate(idx):
+                    out[a] = sums[row, :len(grids[a][2])]
+            return out
 
-        return _backend.run(model, "quadrature", lambda: _numpy_phi_sums(model, wi, theta, theta_w, phi), jit)
-    return _numpy_phi_sums(model, wi, theta, theta_w, phi)
+        return _backend.run(model, "quadrature", numpy, jit)
+    return numpy()
 
 
-def _numpy_phi_sums(model, wi, theta, theta_w, phi):
+#: A launch of grids padded to a common size holds at most this many times their nodes.
+PAD_WASTE = 1.25
+
+
+def _pad_groups(shapes) -> list:
+    """Indices of ``shapes`` (``(rows, cols)`` of tensor grids) in groups whose padding
+    to the group's largest rows and columns adds at most :data:`PAD_WASTE` - 1 of
+    their nodes (largest first; a grid alone is a group)."""
+    order = sorted(range(len(shapes)), key=lambda a: -shapes[a][0] * shapes[a][1])
+    groups, cur, rows, cols, nodes = [], [], 0, 0, 0
+    for a in order:
+        r, c = shapes[a]
+        if cur and (len(cur) + 1) * max(rows, r) * max(cols, c) > PAD_WASTE * (nodes + r * c):
+            groups.append(cur)
+            cur, rows, cols, nodes = [], 0, 0, 0
+        cur.append(a)
+        rows, cols, nodes = max(rows, r), max(cols, c), nodes + r * c
+    return groups + [cur] if cur else groups
+
+
+def _numpy_phi_sums(model, wi, grids):
+    out, group, size = [], [], 0
+    for k, g in enumerate(grids):
+        group.append(g)
+        size += len(g[0]) * len(g[2])
+        if size >= NUMPY_GROUP or k == len(grids) - 1:
+            wo = np.concatenate([_wo_grid(t, p).reshape(-1, 3) for t, _, p in group])
+            pdf = model.pdf(wi, wo)
+            at = 0
+            for t, w, p in group:
+                cell = pdf[at:at + len(t) * len(p)].reshape(len(t), len(p))
+                out.append((cell * w[:, None]).sum(axis=0))
+                at += len(t) * len(p)
+            group, size = [], 0
+    return out
+
+
+def _wo_grid(theta, phi):
     st = np.sin(theta)
-    wo = np.stack(np.broadcast_arrays(st[:, None] * np.cos(phi)[None, :],
-                                      st[:, None] * np.sin(phi)[None, :], np.cos(theta)[:, None]), axis=-1)
-    return (model.pdf(wi, wo) * theta_w[:, None]).sum(axis=0)
+    return np.stack(np.broadcast_arrays(st[:, None] * np.cos(phi)[None, :],
+                                        st[:, None] * np.sin(phi)[None, :], np.cos(theta)[:, None]), axis=-1)
 
 
 def _integrate(model, kind, wis, tol, levels):
@@ -360,7 +425,14 @@ def is_isotropic(model, trials: int = 16, seed: int = 7) -> bool:
     """Probe the contract: does rotating both directions about the normal leave ``f``
     unchanged (relative 1e-9) on random pairs, and on pairs near the mirror
     direction at angular offsets 1e-1 to 1e-5 rad (where a narrow lobe is
-    non-zero: Ward with ``alpha_x = 1e-4`` is zero on every random pair)?"""
+    non-zero: Ward with ``alpha_x = 1e-4`` is zero on every random pair)?
+
+    An object that declares its isotropy (``isotropic``, a bool: a Mitsuba BSDF's
+    ``Anisotropic`` flag, read by :class:`plausible.analysis.mitsuba_bsdf.MitsubaBSDF`, since the
+    probe's 1e-9 would find float32 rounding anisotropic) is taken at its word."""
+    declared = getattr(model, "isotropic", None)
+    if isinstance(declared, bool):
+        return declared
     rng = np.random.default_rng(seed)
     wi = _random_upper(rng, trials)
     wo = _random_upper(rng, trials)

@@ -44,9 +44,16 @@ def spec_of(model) -> str:
     """A canonical text of a model and its parameters (the cache key): the
     registry's spec string, whose floats are exact (``repr``), else the class and
     its parameters at full precision.  Not ``repr(model)``: it prints 6
-    significant digits, so ``n=20`` and ``n=20.00004`` shared a table."""
+    significant digits, so ``n=20`` and ``n=20.00004`` shared a table.  A model
+    that names itself (``cache_key()``, e.g. a foreign BSDF held as a model) gives
+    that; a sum outside the registry its parts and scales."""
+    key = getattr(model, "cache_key", None)
+    if callable(key):
+        return key()
     if getattr(model, "info", None) is not None:
         return model.spec()
+    if hasattr(model, "parts") and hasattr(model, "scales"):
+        return "sum(" + ", ".join(f"[{spec_of(m)}]*{_exact(s)}" for m, s in zip(model.parts, model.scales)) + ")"
     params = getattr(model, "params", None)
     if isinstance(params, dict):
         return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
@@ -86,7 +93,8 @@ def _cached(kind: str, model, compute, wrap=lambda v: v):
         return _TABLES[key]
     digest = hashlib.sha1(key.encode()).hexdigest()
     cache = table_cache_dir()
-    path = cache / f"{kind}-{digest}.npy" if cache else None
+    # a model that nothing outside this process names (a Python callable) stays in memory
+    path = cache / f"{kind}-{digest}.npy" if cache and getattr(model, "disk_cache", True) else None
     out = None
     if path is not None and path.exists():
         try:

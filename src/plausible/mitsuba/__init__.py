@@ -32,6 +32,7 @@ from __future__ import annotations
 from .. import registry
 from .plugin import make_merl_class, make_plugin_class
 from .props import COMMON_ALIASES, PLUGIN_ALIASES, aliases_for
+from .variant import VARIANTS, ensure_variant
 
 
 def plugin_names() -> dict:
@@ -44,29 +45,6 @@ def plugin_names() -> dict:
     if "modified-phong" in registry.names():
         out["phong"] = "modified-phong"
     return out
-
-
-#: The variants :func:`ensure_variant` tries, in order, when none is set.
-VARIANTS = ("llvm_ad_rgb", "scalar_rgb")
-
-
-def ensure_variant():
-    """Import Mitsuba and, when no variant is set, set the first of :data:`VARIANTS`
-    that loads; return ``mi``.  The one variant setter of plausible (the plugins
-    and the adapter of Mitsuba BSDFs, :mod:`plausible.analysis.mitsuba_bsdf`);
-    its error lists why each variant failed."""
-    import mitsuba as mi
-
-    if mi.variant() is not None:
-        return mi
-    reasons = []
-    for v in VARIANTS:
-        try:
-            mi.set_variant(v)
-            return mi
-        except (ImportError, AttributeError, RuntimeError) as err:
-            reasons.append(f"{v}: {type(err).__name__}: {err}")
-    raise RuntimeError("plausible.mitsuba: no Mitsuba variant could be set (" + "; ".join(reasons) + ")")
 
 
 _REGISTERED: dict = {}
@@ -100,6 +78,9 @@ def register(variant: str | None = None) -> list:
     from . import material
 
     out += material.register_plugin(classes)  # plausible_material (plausible.mitsuba.material)
+    from . import compensated
+
+    out += compensated.register_plugin(classes)  # plausible_compensated (plausible.mitsuba.compensated)
     return out
 
 

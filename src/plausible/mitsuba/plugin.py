@@ -103,7 +103,7 @@ def array_safe(mi, model, name: str) -> bool:
     parameter is sampled with its texture's mean (still unbiased: ``pdf`` and
     ``sample`` use the same ``q``).  Checked with a dry run on two-element arrays.
     """
-    from ..ops import drjit_ops
+    from ..arrays.ops import drjit_ops
 
     if not _dr().is_array_v(mi.Float):
         return False  # a scalar variant: one value per call, never an array
@@ -428,47 +428,12 @@ def _dr():
     return dr
 
 
-def make_plugin_class(plugin: str, model_name: str, info=None):
-    """A ``mitsuba.BSDF`` subclass wrapping the registered model ``model_name``
-    (or the model described by ``info``, a :class:`plausible.params.ModelInfo`)."""
-    import drjit as dr
-    import mitsuba as mi
+def _lobe_methods(mi, dr):
+    """The plugin's direction bookkeeping over the model's lobes (a ``mi.BSDF``
+    subclass of the current variant; :func:`make_plugin_class` derives from it)."""
+    from ..arrays.ops import drjit_ops
 
-    from ..ops import drjit_ops
-
-    info = info if info is not None else registry.info(model_name)
-    alias = P.aliases_for(plugin, info)
-
-    def log(text):
-        mi.Log(mi.LogLevel.Debug, text)
-
-    class PlausibleBSDF(mi.BSDF):
-        INFO = info
-        ALIASES = alias
-        PLUGIN = plugin
-
-        #: properties read by a subclass itself (not model parameters)
-        EXTRA_PROPS: tuple = ()
-
-        def __init__(self, props):
-            mi.BSDF.__init__(self, props)
-            self.state = ParamState(mi, plugin, info, props, alias, log,
-                                    make=self._model_factory(props), ignore=self.EXTRA_PROPS)
-            self._set_flags()
-
-        def _model_factory(self, props):
-            """``function(**params) -> model``; None: the registry's class."""
-            return None
-
-        def _set_flags(self):
-            self.m_flags = self.state.m_flags
-            self.m_components = list(self.state.components)
-            self.anisotropic = bool(self.state.m_flags & mi.BSDFFlags.Anisotropic)
-
-        @property
-        def model(self):
-            return self.state.model
-
+    class PlausibleLobes(mi.BSDF):
         # -- direction bookkeeping ---------------------------------------------------
         @staticmethod
         def _split(v):
@@ -500,6 +465,15 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
             f = mi.UnpolarizedSpectrum(*f) if isinstance(f, tuple) else mi.UnpolarizedSpectrum(f)
             return f * dr.maximum(wo_c[2], 0.0)
 
+    return PlausibleLobes
+
+
+def _interface_methods(mi, dr, base):
+    """Mitsuba's BSDF interface (``eval``, ``pdf``, ``sample``, the diffuse
+    reflectance) on the bookkeeping of ``base`` (:func:`_lobe_methods`)."""
+    from ..arrays.ops import drjit_ops
+
+    class PlausibleInterface(base):
         # -- the BSDF interface ------------------------------------------------------
         def eval(self, ctx, si, wo, active=True):
             enabled = self._enabled(ctx)
@@ -564,6 +538,48 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
             total = add_values([a(ops, wi_c, p) for a in albedos])
             value = mi.UnpolarizedSpectrum(*total) if isinstance(total, tuple) else mi.UnpolarizedSpectrum(total)
             return self._spectrum(dr.select(active & (si.wi.z > 0), value, 0.0))
+
+    return PlausibleInterface
+
+
+def make_plugin_class(plugin: str, model_name: str, info=None):
+    """A ``mitsuba.BSDF`` subclass wrapping the registered model ``model_name``
+    (or the model described by ``info``, a :class:`plausible.params.ModelInfo`)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    info = info if info is not None else registry.info(model_name)
+    alias = P.aliases_for(plugin, info)
+
+    def log(text):
+        mi.Log(mi.LogLevel.Debug, text)
+
+    class PlausibleBSDF(_interface_methods(mi, dr, _lobe_methods(mi, dr))):
+        INFO = info
+        ALIASES = alias
+        PLUGIN = plugin
+
+        #: properties read by a subclass itself (not model parameters)
+        EXTRA_PROPS: tuple = ()
+
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.state = ParamState(mi, plugin, info, props, alias, log,
+                                    make=self._model_factory(props), ignore=self.EXTRA_PROPS)
+            self._set_flags()
+
+        def _model_factory(self, props):
+            """``function(**params) -> model``; None: the registry's class."""
+            return None
+
+        def _set_flags(self):
+            self.m_flags = self.state.m_flags
+            self.m_components = list(self.state.components)
+            self.anisotropic = bool(self.state.m_flags & mi.BSDFFlags.Anisotropic)
+
+        @property
+        def model(self):
+            return self.state.model
 
         # -- parameters ---------------------------------------------------------------
         def traverse(self, callback):

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from xml.sax.saxutils import quoteattr
 
-import numpy as np
-
 from ..bxdf import BxDF
 
 
@@ -26,25 +24,6 @@ def plugin_name(model: BxDF) -> str:
     raise ValueError(f"{model.name!r} has no Mitsuba plugin (is it a registered model?)")
 
 
-def _value(p, v):
-    if isinstance(v, BxDF):
-        from ..registry import spec_of
-
-        return spec_of(v)
-    if p.kind == "color":
-        arr = np.atleast_1d(np.asarray(v, dtype=np.float64))
-        if arr.size == 1:
-            return float(arr[0])
-        return {"type": "rgb", "value": [float(x) for x in arr]}
-    if isinstance(v, (list, tuple)):
-        from ..params import format_groups
-
-        return format_groups(v)
-    if isinstance(v, (int, float)) and not isinstance(v, bool):
-        return float(v)
-    return v
-
-
 def to_dict(model: BxDF) -> dict:
     """The ``mi.load_dict`` description of ``model`` as a plausible plugin."""
     d = {"type": plugin_name(model)}
@@ -52,7 +31,7 @@ def to_dict(model: BxDF) -> dict:
         v = model.params[p.name]
         if v is None:
             continue
-        d[p.name] = _value(p, v)
+        d[p.name] = p.to_mitsuba(v)
     return d
 
 

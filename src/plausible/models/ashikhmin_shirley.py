@@ -26,7 +26,7 @@ import numpy as np
 from .. import vec, warps
 from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
 from ..fresnel import schlick
-from ..ops import PI
+from ..arrays.ops import PI
 from ..params import Param
 from ..registry import register
 from ..vec import above

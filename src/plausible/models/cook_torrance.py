@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from .. import fresnel, vec, warps
 from ..bxdf import BxDF
-from ..ops import PI
+from ..arrays.ops import PI
 from ..params import Param
 from ..registry import register
 from ..vec import above

@@ -58,7 +58,7 @@ import numpy as np
 
 from .. import fresnel, special, vec, warps
 from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
-from ..ops import INV_PI, PI
+from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
 from ..vec import above
@@ -387,7 +387,7 @@ class HeTorrance(BxDF):
         ``(direction, weight)`` with ``direction`` the mirror of ``wi`` and
         ``weight = F(c_i) exp(-g) S(c_i)^2`` (its energy; the integral of
         ``rho_sp cos(theta_o)``).  ``wi`` of shape ``(..., 3)``."""
-        from ..bxdf import as_directions, split
+        from ..directions import as_directions, split
 
         w = as_directions("wi", wi)
         c = self._color_axis(split(w))
@@ -442,7 +442,7 @@ class HeTorrance(BxDF):
 
 
 def _np_ops():
-    from ..ops import NP
+    from ..arrays.ops import NP
 
     return NP
 

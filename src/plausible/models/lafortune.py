@@ -64,7 +64,7 @@ import numpy as np
 
 from .. import vec, warps
 from ..bxdf import BxDF, Lobe
-from ..ops import INV_PI, PI
+from ..arrays.ops import INV_PI, PI
 from ..params import Param, parse_groups
 from ..registry import register
 from ..vec import above

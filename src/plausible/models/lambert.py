@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from .. import warps
 from ..bxdf import BxDF, Lobe
-from ..ops import INV_PI
+from ..arrays.ops import INV_PI
 from ..params import Param
 from ..registry import register
 from ..vec import above

@@ -30,7 +30,7 @@ import numpy as np
 
 from .. import fresnel, vec, warps
 from ..bxdf import BxDF
-from ..ops import INV_PI, PI
+from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
 from ..vec import above

@@ -190,8 +190,8 @@ class MerlBRDF(BxDF):
         point along both tangents and in between.  (At ``phi_h = 0`` for all,
         every half vector has ``h_y = 0`` and an anisotropic model's
         ``alpha_y`` is traded freely against its scale.)"""
-        from ..bxdf import as_directions, split
-        from ..ops import NP
+        from ..directions import as_directions, split
+        from ..arrays.ops import NP
 
         a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))
         with np.errstate(all="ignore"):
@@ -205,8 +205,8 @@ class MerlBRDF(BxDF):
 
     def missing(self, wi, wo) -> np.ndarray:
         """Boolean mask: the pair falls in a cell without a measurement."""
-        from ..bxdf import as_directions, split
-        from ..ops import NP
+        from ..directions import as_directions, split
+        from ..arrays.ops import NP
 
         a, b = split(as_directions("wi", wi)), split(as_directions("wo", wo))
         with np.errstate(all="ignore"):

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import vec, warps
 from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
-from ..ops import INV_PI, PI
+from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
 from ..text import fmt

@@ -70,6 +70,17 @@ class ModelParam(Param):
     def range_text(self) -> str:
         return "a registered model spec 'name:k=v:...' or a BxDF instance"
 
+    def parse(self, text: str):
+        """A spec, with or without its square brackets (``[name:k=v]``)."""
+        text = text.strip()
+        return text[1:-1] if text.startswith("[") and text.endswith("]") else text
+
+    def to_json(self, value):
+        return "[" + value.spec() + "]" if isinstance(value, BxDF) else value
+
+    def to_mitsuba(self, value):
+        return value.spec() if isinstance(value, BxDF) else value
+
     def validate(self, value, owner: str = "model"):
         where = f"{owner}: parameter '{self.name}'"
         if isinstance(value, BxDF):
@@ -180,6 +191,7 @@ class PumpedUp(BxDF):
         super().__init__(**params)
         base = self.params["base"]
         self.base = base
+        self.disk_cache = getattr(base, "disk_cache", True)   # a base known only in this process
         if self.params["times"] > 0:
             check_bounded_albedo(base, progress=progress)
         self.tables = []

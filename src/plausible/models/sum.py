@@ -245,9 +245,4 @@ def _fmt_scale(s):
 
 
 def _claims_reciprocal(model) -> bool:
-    if isinstance(model, Sum):
-        return model.reciprocal
-    own = getattr(type(model), "reciprocal", None)
-    if isinstance(own, bool):
-        return own
-    return bool(model.info.reciprocal) if model.info is not None else False
+    return bool(model.reciprocal)       # BxDF.reciprocal: the registry's claim, or the model's own

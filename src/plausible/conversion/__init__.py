@@ -1,0 +1,428 @@
+"""Conversion of legacy and published materials to the models renderers use today,
+with the error measured (``docs/convert.md``).
+
+:func:`convert` reads a *source* -- a model spec (``"modified-phong:kd=0.5"``, a
+sum ``"lambertian:rd=0.5 + reciprocal-blinn:ks=0.3:n=50"``), a published fit
+``"material:NAME@FIT"``, a Mitsuba BSDF (a dict as ``mi.load_dict`` takes it, a
+Mitsuba XML file: every ``<bsdf id=...>``, or a ``.json`` file of such dicts by
+name) or a Wavefront ``.mtl`` file (every ``newmtl``; :mod:`.mtl`) -- as
+plausible models, and fits a *target* to each:
+
+* ``"mitsuba"``: one of Mitsuba's ``diffuse``, ``roughconductor``,
+  ``roughplastic``, ``principled`` per material (:func:`.mitsuba.choose_family`),
+  or ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code
+  (:func:`.mitsuba.fit_family`);
+* ``"gltf"``: the glTF 2.0 metallic-roughness material (refused until the glTF
+  model and writer are installed: :func:`plausible.export.gltf.write_gltf`);
+* any registered model: :func:`plausible.fit`.
+
+Each :class:`Converted` holds the target's parameters, every fitting metric's
+figure, the albedo of source and target at 0, 45 and 75 degrees (the target's
+by Mitsuba's own sampler for a Mitsuba target) and warnings where the target
+cannot represent the source.  :meth:`Conversion.write` writes ``.json`` (a dict
+of Mitsuba dicts by name, for ``mi.load_dict``) or ``.xml`` (``<bsdf id=...>``
+elements).
+
+>>> import plausible
+>>> c = plausible.convert("lambertian:rd=0.5", to="mitsuba")        # doctest: +SKIP
+>>> c.items[0].target, c.items[0].params["reflectance"]["value"]      # doctest: +SKIP
+('mitsuba:diffuse', [0.5, 0.5, 0.5])
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from .mitsuba import REPORT_THETAS
+
+__all__ = ["Conversion", "Converted", "Source", "TOLERANCE", "albedo_check", "convert", "mitsuba_xml", "read_sources"]
+
+#: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
+#: conversion of a conserving source is expected to keep; beyond it a warning.
+TOLERANCE = 0.05
+#: Incidences (degrees) at which a source's albedo is probed for energy conservation.
+CONSERVE_THETAS = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 75.0, 80.0, 85.0)
+
+
+@dataclass
+class Source:
+    """One material read from a source: its ``name``, the model (the contract),
+    the plausible ``spec`` it was read as, notes of the reading, and textures
+    carried by reference (statement -> file)."""
+
+    name: str
+    model: object
+    spec: str
+    notes: list = field(default_factory=list)
+    textures: dict = field(default_factory=dict)
+
+
+@dataclass
+class Converted:
+    """One conversion (the fields of the ``--json`` report)."""
+
+    name: str
+    source: str
+    target: str
+    params: dict
+    errors: dict
+    albedo: dict
+    warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    textures: dict = field(default_factory=dict)
+    #: The target: a Mitsuba dict, or a registered model.
+    result: object = None
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "source": self.source, "target": self.target, "params": self.params,
+                "error": self.errors, "albedo": self.albedo, "warnings": self.warnings, "notes": self.notes,
+                "textures": self.textures}
+
+
+@dataclass
+class Conversion:
+    """Every material of one source converted to one target."""
+
+    to: str
+    metric: str
+    items: list
+
+    def to_json(self) -> list:
+        return [c.to_dict() for c in self.items]
+
+    def mitsuba_dicts(self) -> dict:
+        """``{name: dict for mi.load_dict}`` (a registered-model target: its plausible plugin,
+        loadable after :func:`plausible.mitsuba.register`)."""
+        from ..mitsuba.scene_dict import to_dict
+
+        return {c.name: (c.result if isinstance(c.result, dict) else to_dict(c.result)) for c in self.items}
+
+    def write(self, path) -> Path:
+        """Write the targets to ``path`` by its suffix: ``.json`` (a dict of Mitsuba dicts by
+        name) or ``.xml`` (a scene fragment of ``<bsdf id=NAME>`` elements)."""
+        p = Path(path)
+        suffix = p.suffix.lower()
+        if suffix == ".json":
+            p.write_text(json.dumps(self.mitsuba_dicts(), indent=2) + "\n")
+        elif suffix == ".xml":
+            p.write_text(mitsuba_xml(self.mitsuba_dicts()))
+        elif suffix == ".gltf":
+            write = _gltf_writer()
+            if self.to != "gltf":
+                raise ValueError(f"out: a .gltf file holds glTF materials; convert with to='gltf' (this "
+                                 f"conversion is to {self.to!r})")
+            write({c.name: c.result for c in self.items}, p)
+        else:
+            raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {str(path)!r}")
+        return p
+
+
+#: The registered model of the glTF 2.0 metallic-roughness BRDF (issue 32's glTF part).
+GLTF_MODEL = "gltf-pbr"
+
+
+def _gltf_writer():
+    """``plausible.export.gltf.write_gltf`` when the glTF target is installed, else ValueError."""
+    from .. import registry
+
+    try:
+        registry.info(GLTF_MODEL)
+        from ..export.gltf import write_gltf
+    except (ValueError, ImportError):
+        raise ValueError(_GLTF_REFUSAL) from None
+    return write_gltf
+
+
+_GLTF_REFUSAL = ("glTF output is not available yet: the glTF target (the Khronos metallic-roughness BRDF "
+                 "and the .gltf writer, plausible.export.gltf) is not installed in this version; "
+                 "convert to 'mitsuba' or a registered model")
+
+
+# -- sources --------------------------------------------------------------------------------------
+
+def read_sources(source) -> list[Source]:
+    """The materials of ``source`` (see the module docstring), each a :class:`Source`.
+    ValueError for a missing file or a spec that does not build."""
+    from .. import registry
+
+    if isinstance(source, dict):
+        return [_mitsuba_source(source.get("id", source.get("type", "bsdf")), source)]
+    if hasattr(source, "eval") and not isinstance(source, (str, Path)):
+        from ..analysis.adapters import as_bxdf
+
+        m = as_bxdf(source)
+        return [Source(getattr(m, "label", None) or m.name, m, registry.spec_of(m))]
+    if not isinstance(source, (str, Path)):
+        raise ValueError(f"source must be a model spec, material:NAME@FIT, a Mitsuba BSDF dict or file, "
+                         f"or an .mtl file; got {type(source).__name__}")
+    text = str(source).strip()
+    suffix = Path(text).suffix.lower()
+    if suffix in (".mtl", ".xml", ".json"):
+        if not Path(text).is_file():
+            raise ValueError(f"source file {text!r} not found")
+        if suffix == ".mtl":
+            from .mtl import as_model, read_mtl
+
+            out = []
+            for m in read_mtl(text):
+                model, spec, notes = as_model(m)
+                out.append(Source(m.name, model, spec, notes, m.texture_files))
+            return out
+        if suffix == ".xml":
+            return _xml_sources(text)
+        return _json_sources(text)
+    if " + " in text:
+        from ..models.sum import Sum
+
+        parts = [registry.make_from_spec(s.strip()) for s in text.split(" + ")]
+        return [Source("sum", Sum(parts, name="sum"), " + ".join(s.strip() for s in text.split(" + ")))]
+    m = registry.make_from_spec(text)
+    spec = registry.spec_of(m)
+    return [Source(getattr(m, "label", None) or m.name, m, text if spec == repr(m) else spec)]
+
+
+def _mitsuba_source(name, d, bsdf=None):
+    from ..analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict
+
+    b = MitsubaBSDF(bsdf if bsdf is not None else load_bsdf_dict(d))
+    spec = "mitsuba:" + (json.dumps(d, sort_keys=True) if d is not None else b.plugin)
+    return Source(str(name), b, spec, ["read through Mitsuba (the adapter plausible.analysis.mitsuba_bsdf)"])
+
+
+def _json_sources(path):
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as e:
+        raise ValueError(f"source {path}: not a JSON file of Mitsuba BSDF dicts ({e})") from None
+    if isinstance(data, dict) and "type" in data:
+        return [_mitsuba_source(Path(path).stem, data)]
+    if not isinstance(data, dict) or not data or not all(isinstance(v, dict) for v in data.values()):
+        raise ValueError(f"source {path}: expected a Mitsuba BSDF dict or a dict of them by name")
+    return [_mitsuba_source(k, v) for k, v in data.items()]
+
+
+def _xml_sources(path):
+    import xml.etree.ElementTree as ET
+
+    from ..analysis.mitsuba_bsdf import load_bsdf_xml
+
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as e:
+        raise ValueError(f"source {path}: not an XML file ({e})") from None
+    ids = [el.get("id") for el in root.iter("bsdf") if el.get("id")]
+    if not ids and root.tag == "bsdf":
+        return [_mitsuba_source(Path(path).stem, None, load_bsdf_xml(path))]
+    if not ids:
+        raise ValueError(f"source {path}: no <bsdf id=...> in the file")
+    return [_mitsuba_source(i, None, load_bsdf_xml(path, i)) for i in ids]
+
+
+# -- the conversion ---------------------------------------------------------------------------------
+
+def _source_albedo(model):
+    from ..analysis import albedo_curve
+
+    a = np.asarray(albedo_curve(model, thetas_deg=CONSERVE_THETAS).value, float)
+    return np.broadcast_to(a.reshape(len(CONSERVE_THETAS), -1), (len(CONSERVE_THETAS), 3))
+
+
+def _albedo_report(src_alb, tgt_alb):
+    out = {}
+    for k, t in enumerate(REPORT_THETAS):
+        s = src_alb[CONSERVE_THETAS.index(t)]
+        d = tgt_alb[k] - s
+        out[f"{t:g}"] = {"source": [float(x) for x in s], "target": [float(x) for x in tgt_alb[k]],
+                         "difference": [float(x) for x in d], "max_abs_difference": float(np.max(np.abs(d)))}
+    return out
+
+
+def _conserving(src, src_alb):
+    """Warnings if ``src``'s albedo exceeds 1 at a probed incidence."""
+    top = float(src_alb.max())
+    if top > 1.0 + 1e-3:
+        t = CONSERVE_THETAS[int(np.argmax(src_alb.max(axis=1)))]
+        return [f"the source is not energy conserving (albedo {top:.3f} at {t:g} degrees): no target of "
+                f"albedo <= 1 can represent it; its albedo is matched where it can be"]
+    return []
+
+
+def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: int = 2) -> Conversion:
+    """Convert every material of ``source`` to ``to`` under ``metric`` (module docstring).
+
+    ``to``: ``"mitsuba"``, ``"mitsuba:TYPE"`` (``diffuse``, ``roughconductor``,
+    ``roughplastic``, ``principled``), ``"gltf"``, or a registered model's name.
+    ``metric``: one of :data:`plausible.fitting.metrics.METRICS` (the perceptual
+    metric, default, fits lobe and albedo together).  ``starts``: optimiser
+    starts of a registered-model fit.  Returns a :class:`Conversion`.
+    """
+    from ..fitting import metrics as M
+    from . import mitsuba as CM
+
+    if metric not in M.METRICS:
+        raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
+    to = str(to).strip()
+    family = None
+    if to == "gltf":
+        _gltf_writer()          # refused with a clear message until the glTF target is installed
+        family = GLTF_MODEL
+    if to.startswith("mitsuba:"):
+        family = to.split(":", 1)[1]
+        if family not in CM.FAMILIES or family in CM.PLAUSIBLE_TYPES:
+            raise ValueError(f"to: Mitsuba target type {family!r} is not fitted; choose one of "
+                             f"{', '.join('mitsuba:' + k for k in CM.FAMILIES if k not in CM.PLAUSIBLE_TYPES)} (or 'mitsuba' to let the "
+                             f"source choose)")
+    elif to not in ("mitsuba", "gltf"):
+        from .. import registry
+
+        registry.info(to)    # a clear error for an unknown name
+    items = []
+    for src in read_sources(source):
+        src_alb = _source_albedo(src.model)
+        warn = _conserving(src, src_alb)
+        if to.startswith("mitsuba") or to == "gltf":
+            items.append(_to_mitsuba(src, family, metric, src_alb, warn))
+        else:
+            items.append(_to_model(src, to, metric, starts, src_alb, warn))
+    return Conversion(to, metric, items)
+
+
+def _to_mitsuba(src, family, metric, src_alb, warn):
+    from . import mitsuba as CM
+
+    notes = list(src.notes)
+    if family is None:
+        families, why = CM.candidates(src.model, src_alb[0])
+        probe = CM.Probe([src.model.peak_directions, CM._mirror])
+        target = CM._target(src.model, probe)
+        fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
+        r = min(fits, key=lambda x: x.figure)
+        family = r.family
+        tried = ", ".join(f"{x.family} {x.figure:.3g}" for x in fits)
+        notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
+    else:
+        r = CM.fit_family(src.model, family, metric)
+    textures = dict(src.textures)
+    d = _with_textures(r.dict, family, textures, notes)
+    tgt_alb = CM.sampler_albedo(r.dict)
+    alb = _albedo_report(src_alb, tgt_alb)
+    warn = warn + _albedo_warnings(alb)
+    if family in CM.PLAUSIBLE_TYPES:
+        from .. import registry
+
+        model = registry.make(family, **CM.model_params(d))
+        return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
+                         model)
+    return Converted(src.name, src.spec, f"mitsuba:{family}", d, r.errors, alb, warn, notes, textures, d)
+
+
+#: Which Mitsuba parameter an MTL texture replaces, per family.
+TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_reflectance",
+                            "principled": "base_color", "blendbsdf": "bsdf_0.reflectance"},
+                 "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance"}}
+
+
+def _with_textures(d, family, textures, notes):
+    import copy
+
+    from . import mitsuba as CM
+
+    d = copy.deepcopy(d)
+    for stmt, slots in TEXTURE_SLOTS.items():
+        if stmt in textures and family in slots:
+            key = slots[family]
+            notes.append(f"{stmt} {textures[stmt]}: a bitmap texture in place of the fitted {key} "
+                         f"{CM.get_entry(d, key)['value']} (the fit used the constant colour)")
+            CM.set_entry(d, key, {"type": "bitmap", "filename": textures[stmt]})
+    for stmt in textures:
+        if stmt not in TEXTURE_SLOTS or family not in TEXTURE_SLOTS[stmt]:
+            notes.append(f"{stmt} {textures[stmt]}: carried by reference only (no {family} parameter takes it)")
+    return d
+
+
+def _albedo_warnings(alb):
+    bad = [(t, v["max_abs_difference"]) for t, v in alb.items() if v["max_abs_difference"] > TOLERANCE]
+    if not bad:
+        return []
+    return ["the target's albedo differs from the source's by more than "
+            f"{TOLERANCE} at " + ", ".join(f"{t} degrees ({d:.3f})" for t, d in bad)
+            + ": the target family cannot follow the source's albedo curve"]
+
+
+def _to_model(src, name, metric, starts, src_alb, warn):
+    from ..analysis import albedo_curve
+    from ..fitting import fit
+    from ..fitting.fit import UnconstrainedWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UnconstrainedWarning)
+        r = fit(name, src.model, metric, starts=starts)
+    notes = list(src.notes) + [str(w.message) for w in caught if issubclass(w.category, UnconstrainedWarning)]
+    a = np.asarray(albedo_curve(r.model, thetas_deg=REPORT_THETAS).value, float)
+    tgt_alb = np.broadcast_to(a.reshape(len(REPORT_THETAS), -1), (len(REPORT_THETAS), 3))
+    alb = _albedo_report(src_alb, tgt_alb)
+    params = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.params.items()}
+    from .. import registry
+
+    params = {k: (registry.spec_of(v) if hasattr(v, "eval") else v) for k, v in params.items()}
+    return Converted(src.name, src.spec, name, params, dict(r.errors), alb, warn + _albedo_warnings(alb), notes,
+                     dict(src.textures), r.model)
+
+
+def albedo_check(source_model, bsdf_dict: dict, tolerance: float = TOLERANCE):
+    """``(holds, differences)``: whether the albedo of the Mitsuba BSDF ``bsdf_dict``
+    by Mitsuba's own sampler (:func:`.mitsuba.sampler_albedo`) is within ``tolerance``
+    (every channel) of ``source_model``'s (accurate integrator) at 0, 45 and 75
+    degrees; ``differences`` (3, 3): target minus source per incidence and channel."""
+    from ..analysis import albedo_curve
+    from .mitsuba import sampler_albedo
+
+    a = np.asarray(albedo_curve(source_model, thetas_deg=REPORT_THETAS).value, float)
+    a = np.broadcast_to(a.reshape(len(REPORT_THETAS), -1), (len(REPORT_THETAS), 3))
+    d = sampler_albedo(bsdf_dict) - a
+    return bool(np.all(np.abs(d) <= tolerance)), d
+
+
+def mitsuba_xml(dicts: dict) -> str:
+    """A Mitsuba 3 scene fragment: one ``<bsdf type=... id=NAME>`` per dict (floats,
+    ``<rgb>``, ``<boolean>``, ``<string>``, a ``bitmap`` as a nested ``<texture>``, a
+    nested BSDF, ``blendbsdf``'s ``bsdf_0``/``bsdf_1``, as a nested ``<bsdf>``)."""
+    lines = ['<scene version="3.0.0">']
+    for name, d in dicts.items():
+        lines += _xml_element("bsdf", d, f" id={quoteattr(name)}", "    ")
+    lines.append("</scene>")
+    return "\n".join(lines) + "\n"
+
+
+def _xml_element(tag, d, attrs, pad):
+    out = [f"{pad}<{tag} type={quoteattr(d['type'])}{attrs}>"]
+    for k, v in d.items():
+        if k == "type":
+            continue
+        if isinstance(v, dict) and v.get("type") not in ("rgb", "bitmap"):
+            out += _xml_element("bsdf", v, f" name={quoteattr(k)}", pad + "    ")
+        else:
+            out.append(pad + "    " + _xml_value(k, v))
+    out.append(f"{pad}</{tag}>")
+    return out
+
+
+def _xml_value(k, v):
+    if isinstance(v, dict) and v.get("type") == "rgb":
+        val = ", ".join(f"{x:.9g}" for x in np.broadcast_to(np.asarray(v["value"], float), (3,)))
+        return f"<rgb name={quoteattr(k)} value={quoteattr(val)}/>"
+    if isinstance(v, dict) and v.get("type") == "bitmap":
+        return (f"<texture type=\"bitmap\" name={quoteattr(k)}><string name=\"filename\" "
+                f"value={quoteattr(v['filename'])}/></texture>")
+    if isinstance(v, bool):
+        return f"<boolean name={quoteattr(k)} value=\"{str(v).lower()}\"/>"
+    if isinstance(v, (int, float)):
+        return f"<float name={quoteattr(k)} value={quoteattr(f'{float(v):.17g}')}/>"
+    return f"<string name={quoteattr(k)} value={quoteattr(str(v))}/>"

@@ -1,0 +1,210 @@
+"""Wavefront ``.mtl`` files read as plausible models.
+
+A material library (P. Bourke's transcription of the Alias|Wavefront *MTL*
+specification, ``paulbourke.net/dataformats/mtl``) holds ``newmtl NAME``
+blocks of statements; the ones that describe reflection are ``Kd`` (diffuse
+colour), ``Ks`` (specular colour), ``Ns`` (specular exponent, 0-1000) and
+``illum`` (the illumination model, 0-10).  The reading (``docs/convert.md``
+gives the reasons):
+
+* ``illum 0`` (colour, no lighting) and ``illum 1`` (diffuse): Lambertian,
+  ``f = Kd / pi`` (``lambertian:rd=Kd``); a ``Ks`` there is unused by the
+  model and noted.
+* ``illum 2`` (diffuse and highlight): ``f = Kd / pi + Ks c(Ns) (n.h)^Ns``,
+  the reciprocal Blinn lobe normalised so that its albedo at normal incidence
+  is exactly ``Ks`` (``c(n) = (n+2)(n+4) / (8 pi (n + 2^(-n/2)))``,
+  :func:`plausible.models.phong.blinn_norm`): the sum
+  ``lambertian:rd=Kd + reciprocal-blinn:ks=Ks:n=Ns``.  With this reading
+  ``Kd + Ks <= 1`` (per channel) is energy conservation at normal incidence.
+* ``illum 3`` (``illum 2`` plus ray-traced reflection weighted by ``Ks``):
+  the same sum: the mirror reflection of ``illum 3`` and its highlight are one
+  lobe in a physical reading (the highlight is the blurred reflection of the
+  lights; adding a mirror term of weight ``Ks`` besides counts ``Ks`` twice),
+  and no Fresnel factor (the specification gives Fresnel to ``illum 5`` and
+  ``7`` only).
+* ``Ka`` (ambient) is not a property of a reflector: ignored with a note;
+  ``d``/``Tr`` (dissolve), ``Ni`` (index, used by ``illum 4-7``), ``Ke``:
+  noted and ignored.  Every ``map_*`` (and ``bump``, ``disp``, ``decal``,
+  ``refl``) is carried by reference: its file name (and options) in
+  :attr:`MtlMaterial.textures`.
+
+Defaults where a statement is missing: ``Kd = Ks = 0``, ``Ns = 0``, ``illum 2``
+(each noted).  A bad value raises ValueError naming the file, the line, the
+material and the statement, with the allowed range.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["ILLUM", "MtlMaterial", "read_mtl", "as_model", "NS_MAX"]
+
+#: The illumination models read, and what each means in the specification.
+ILLUM = {0: "colour on, ambient off", 1: "colour on, ambient on (diffuse)",
+         2: "highlight on (diffuse + Blinn-Phong highlight)",
+         3: "reflection on, ray trace on (illum 2 + mirror reflection)"}
+#: Largest ``Ns`` read (the range of ``reciprocal-blinn``'s ``n``; the specification's is 0-1000).
+NS_MAX = 1e6
+#: Statements noted and ignored.
+IGNORED = {"Ka": "ambient colour: not a property of a reflector (ignored)",
+           "d": "dissolve (transparency): not converted", "Tr": "transparency: not converted",
+           "Ni": "optical density: used by illum 4-7 only (ignored)", "Ke": "emission: not a reflection (ignored)",
+           "Tf": "transmission filter: not converted", "sharpness": "reflection-map sharpness (ignored)"}
+TEXTURES = ("bump", "disp", "decal", "refl")
+
+
+@dataclass
+class MtlMaterial:
+    """One ``newmtl`` block: its colours, exponent, illumination model, textures
+    (statement -> the rest of its line: options and file name) and notes."""
+
+    name: str
+    line: int
+    Kd: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    Ks: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    Ns: float = 0.0
+    illum: int = 2
+    textures: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+    given: set = field(default_factory=set)
+
+    @property
+    def texture_files(self) -> dict:
+        """Statement -> file name (the last word of its line; options come before it)."""
+        return {k: v.split()[-1] for k, v in self.textures.items() if v.split()}
+
+
+def _numbers(where, key, words, lo, hi):
+    try:
+        vals = [float(w) for w in words]
+    except ValueError:
+        vals = []
+    if not vals or len(vals) not in (1, 3) or not all(math.isfinite(v) and lo <= v <= hi for v in vals):
+        raise ValueError(f"{where}: {key} must be one number or three numbers (r g b) in [{lo:g}, {hi:g}], "
+                         f"got {' '.join(words)!r}")
+    return np.array(vals * 3 if len(vals) == 1 else vals, float)
+
+
+def _illum(where, words):
+    try:
+        n = int(words[0]) if len(words) == 1 else None
+    except ValueError:
+        n = None
+    if n is None:
+        raise ValueError(f"{where}: illum must be one integer (0-10), got {' '.join(words)!r}")
+    if n not in ILLUM:
+        raise ValueError(f"{where}: illum {n} is not read; the illumination models read are "
+                         + "; ".join(f"{k} ({v})" for k, v in ILLUM.items()))
+    return n
+
+
+def read_mtl(path) -> list[MtlMaterial]:
+    """Every ``newmtl`` of the ``.mtl`` file ``path``, in file order.
+
+    ValueError for a missing or unreadable file, a statement before the first
+    ``newmtl``, a value out of its range (``Kd``, ``Ks`` in [0, 1]; ``Ns`` in
+    [0, 1e6]; ``illum`` one of 0-3), two materials of one name, or a file with
+    no material.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig", errors="strict")
+    except FileNotFoundError:
+        raise ValueError(f"MTL file {str(path)!r} not found") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ValueError(f"MTL file {str(path)!r} cannot be read as text: {e}") from None
+    out: list[MtlMaterial] = []
+    cur = None
+    for ln, raw in enumerate(text.splitlines(), 1):
+        s = raw.split("#", 1)[0].strip()
+        if not s:
+            continue
+        key, *words = s.split()
+        where = f"{path}:{ln}" + (f" (material {cur.name!r})" if cur else "")
+        if key == "newmtl":
+            if not words:
+                raise ValueError(f"{where}: newmtl needs a name")
+            name = " ".join(words)
+            if any(m.name == name for m in out):
+                raise ValueError(f"{where}: material {name!r} defined twice")
+            cur = MtlMaterial(name, ln)
+            out.append(cur)
+            continue
+        if cur is None:
+            raise ValueError(f"{where}: {key!r} before the first newmtl")
+        if key in ("Kd", "Ks"):
+            if words and words[0] in ("spectral", "xyz"):
+                raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b in [0, 1]")
+            setattr(cur, key, _numbers(where, key, words, 0.0, 1.0))
+        elif key == "Ns":
+            cur.Ns = _exponent(where, words)
+            if cur.Ns > 1000:
+                cur.notes.append(f"Ns = {cur.Ns:g} is above the MTL specification's range 0-1000 (read as given)")
+        elif key == "illum":
+            cur.illum = _illum(where, words)
+        elif key.startswith("map_") or key in TEXTURES:
+            if not words:
+                raise ValueError(f"{where}: {key} needs a file name")
+            cur.textures[key] = " ".join(words)
+        elif key in IGNORED:
+            cur.notes.append(f"{key}: {IGNORED[key]}")
+        else:
+            cur.notes.append(f"line {ln}: statement {key!r} is not read (ignored)")
+        cur.given.add(key)
+    if not out:
+        raise ValueError(f"MTL file {str(path)!r} defines no material (no newmtl line)")
+    for m in out:
+        for key, default in (("Kd", "0"), ("Ks", "0"), ("Ns", "0"), ("illum", "2")):
+            if key not in m.given:
+                m.notes.append(f"{key} not given: {default}")
+    return out
+
+
+def _exponent(where, words) -> float:
+    try:
+        v = float(words[0]) if len(words) == 1 else math.nan
+    except ValueError:
+        v = math.nan
+    if not (0.0 <= v <= NS_MAX):
+        raise ValueError(f"{where}: Ns must be one number in [0, {NS_MAX:g}], got {' '.join(words)!r}")
+    return v
+
+
+def _spec_colour(c) -> str:
+    return ",".join(repr(float(x)) for x in c)
+
+
+def as_model(m: MtlMaterial):
+    """``(model, spec, notes)``: the plausible reading of ``m`` (module docstring):
+    a :class:`~plausible.models.sum.Sum` labelled with the material's name, its
+    spec text (``"lambertian:rd=... + reciprocal-blinn:ks=...:n=..."``), and the
+    notes of the reading."""
+    from .. import registry
+    from ..models.sum import Sum
+
+    notes = list(m.notes)
+    parts = []
+    if m.illum in (0, 1):
+        if np.any(m.Ks > 0):
+            notes.append(f"illum {m.illum} has no highlight: Ks is unused")
+        parts.append(f"lambertian:rd={_spec_colour(m.Kd)}")
+        if m.illum == 0:
+            notes.append("illum 0 (unlit colour) read as a Lambertian reflector of albedo Kd")
+    else:
+        if np.any(m.Kd > 0) or not np.any(m.Ks > 0):
+            parts.append(f"lambertian:rd={_spec_colour(m.Kd)}")
+        if np.any(m.Ks > 0):
+            parts.append(f"reciprocal-blinn:ks={_spec_colour(m.Ks)}:n={float(m.Ns)!r}")
+        if m.illum == 3:
+            notes.append("illum 3: the ray-traced reflection is the Blinn-Phong lobe itself (not added twice); "
+                         "no Fresnel (MTL gives Fresnel to illum 5 and 7)")
+    total = m.Kd + (m.Ks if m.illum >= 2 else 0.0)
+    if np.any(total > 1.0 + 1e-12):
+        notes.append(f"Kd + Ks = {_spec_colour(np.round(total, 4))} exceeds 1: the material as read is "
+                     "not energy conserving")
+    models = [registry.make_from_spec(s) for s in parts]
+    return Sum(models, name=m.name), " + ".join(parts), notes

@@ -1,0 +1,213 @@
+"""Conversion to Mitsuba 3's BSDFs (issue 32): the affine colour bases the fit rests
+on (against Mitsuba at random colours), parameters recovered from Mitsuba's own
+BSDFs, the Done-when check (Mitsuba's sampler within 0.05 of the source's albedo)
+and its failure for the rule of thumb and a perturbed result, outputs that Mitsuba
+loads, and the errors of bad targets."""
+
+import json
+
+import numpy as np
+import pytest
+
+mi = pytest.importorskip("mitsuba")
+pytest.importorskip("drjit")
+
+import plausible  # noqa: E402
+from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, ensure_variant, load_bsdf_xml  # noqa: E402
+from plausible.conversion import TOLERANCE, albedo_check, convert, read_sources  # noqa: E402
+from plausible.conversion import mitsuba as CM  # noqa: E402
+
+ensure_variant()
+
+DIFFUSE_MTL = "newmtl plasticky\nKd 0.5 0.4 0.3\nKs 0.1 0.1 0.1\nNs 20\nillum 2\n"
+
+
+@pytest.fixture(scope="module")
+def probe():
+    return CM.Probe([CM._mirror])
+
+
+def _family(name, **fixed):
+    f = CM.FAMILIES[name]
+    return CM.Family(f.type, tuple({**dict(f.fixed), **fixed}.items()), f.axes, f.slots, f.offset)
+
+
+def _affine_gap(probe, fam, point, seed=0):
+    """Largest |Mitsuba - (B0 + sum x_j B_j)| at random colours, relative to the largest value."""
+    F, _ = CM._basis_now(probe, fam, point)
+    x = np.random.default_rng(seed).uniform(0.1, 0.9, size=len(fam.slots))
+    got = probe.measure(CM._load(fam.bsdf_dict(point, dict(zip(fam.slots, x)))))[0][:, 0]
+    want = F[0] + x @ F[1:]
+    return float(np.max(np.abs(got - want)) / np.max(np.abs(want)))
+
+
+@pytest.mark.parametrize("name, point", [("roughconductor", {"alpha": 0.2}), ("roughplastic", {"alpha": 0.3}),
+                                         ("principled", {"roughness": 0.5, "metallic": 0.4}),
+                                         ("blendbsdf", {"bsdf_1.alpha": 0.2, "weight": 0.3})])
+def test_each_family_is_affine_in_its_colours_on_mitsuba(probe, name, point):
+    assert _affine_gap(probe, CM.FAMILIES[name], point) < 1e-5
+
+
+def test_the_affinity_check_fails_for_roughplastic_with_nonlinear_diffuse(probe):
+    # nonlinear=true divides by 1 - diffuse_reflectance * fdr: not affine in the colour
+    assert _affine_gap(probe, _family("roughplastic", nonlinear=True), {"alpha": 0.3}) > 1e-2
+
+
+def test_a_mitsuba_roughconductor_source_gives_back_its_own_parameters():
+    src = {"type": "roughconductor", "distribution": "ggx", "material": "none", "alpha": 0.2,
+           "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]}}
+    c = convert(src, to="mitsuba:roughconductor").items[0]
+    assert c.params["alpha"] == pytest.approx(0.2, rel=0.03)
+    assert np.allclose(c.params["specular_reflectance"]["value"], [0.9, 0.6, 0.3], atol=0.02)
+    assert c.errors["perceptual"] < 0.05
+
+
+@pytest.mark.parametrize("source", ["lambertian:rd=0.6,0.4,0.2", "mtl"])
+def test_converted_bsdfs_load_and_keep_the_albedo_of_conserving_sources(tmp_path, source):
+    if source == "mtl":
+        (tmp_path / "lib.mtl").write_text(DIFFUSE_MTL)
+        source = str(tmp_path / "lib.mtl")
+    res = convert(source, to="mitsuba")
+    out = res.write(tmp_path / "out.json")
+    xml = res.write(tmp_path / "out.xml")
+    wi, wo = plausible.direction([0.2, 0.7, 1.2], 0.3), plausible.direction([0.5, 0.1, 1.0], 2.0)
+    for item, (name, d) in zip(res.items, json.loads(out.read_text()).items()):
+        assert isinstance(mi.load_dict(d), mi.BSDF)
+        ok, diff = albedo_check(read_sources(source)[0].model, d)
+        assert ok, (name, diff)
+        assert not item.warnings
+        # the XML fragment is the same BSDF (9 significant digits of the colours)
+        from_xml, from_json = MitsubaBSDF(load_bsdf_xml(str(xml), name)), MitsubaBSDF(mi.load_dict(d))
+        assert np.allclose(from_xml.eval(wi, wo), from_json.eval(wi, wo), rtol=1e-6)
+
+
+def test_the_rule_of_thumb_and_a_perturbed_result_fail_the_same_check(tmp_path):
+    (tmp_path / "lib.mtl").write_text(DIFFUSE_MTL)
+    src = read_sources(str(tmp_path / "lib.mtl"))[0].model
+    # obj2gltf / exporters: base colour Kd, dielectric, roughness sqrt(2 / (Ns + 2))
+    thumb = {"type": "principled", "base_color": {"type": "rgb", "value": [0.5, 0.4, 0.3]}, "metallic": 0.0,
+             "roughness": float(np.sqrt(2.0 / 22.0))}
+    ok, diff = albedo_check(src, thumb)
+    assert not ok and np.abs(diff).max() > 2 * TOLERANCE
+    good = convert(str(tmp_path / "lib.mtl")).items[0].params
+    assert albedo_check(src, good)[0] and not albedo_check(src, _scaled(good, 0.85))[0]
+
+
+def _scaled(d, s):
+    """``d`` with every RGB colour times ``s`` (nested dicts too)."""
+    if d.get("type") == "rgb":
+        return {"type": "rgb", "value": [s * v for v in d["value"]]}
+    return {k: (_scaled(v, s) if isinstance(v, dict) else v) for k, v in d.items()}
+
+
+def test_a_source_that_is_not_energy_conserving_is_warned_about(tmp_path):
+    (tmp_path / "hot.mtl").write_text("newmtl hot\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNs 4\nillum 2\n")
+    c = convert(str(tmp_path / "hot.mtl"), to="mitsuba:diffuse").items[0]
+    assert any("not energy conserving" in w for w in c.warnings)
+    assert c.albedo["0"]["source"][0] == pytest.approx(1.3, abs=1e-6)
+
+
+def test_the_xml_fragment_loads_each_bsdf_by_its_id(tmp_path):
+    res = convert({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.2, 0.5, 0.7]}, "id": "paint"},
+                  to="mitsuba:diffuse")
+    path = res.write(tmp_path / "out.xml")
+    b = load_bsdf_xml(str(path), "paint")
+    assert np.allclose(MitsubaBSDF(b).eval([0, 0, 1], [0.6, 0, 0.8]) * np.pi, [0.2, 0.5, 0.7], atol=1e-5)
+
+
+def test_textures_of_an_mtl_are_carried_into_the_mitsuba_dict(tmp_path):
+    (tmp_path / "lib.mtl").write_text("newmtl t\nKd 0.5 0.5 0.5\nillum 1\nmap_Kd wood.png\nmap_bump b.png\n")
+    c = convert(str(tmp_path / "lib.mtl")).items[0]
+    assert c.params["reflectance"] == {"type": "bitmap", "filename": "wood.png"}
+    assert c.textures == {"map_Kd": "wood.png", "map_bump": "b.png"}
+    assert any("map_bump b.png: carried by reference only" in n for n in c.notes)
+
+
+@pytest.mark.parametrize("to, words", [("mitsuba:plastic", "mitsuba:roughconductor"),
+                                       ("mitsuba:gltf-pbr", "is not fitted"),
+                                       ("no-such-model", "unknown model")])
+def test_bad_targets_are_refused_with_what_is_allowed(to, words):
+    with pytest.raises(ValueError, match=words):
+        convert("lambertian", to=to)
+
+
+def test_a_registered_model_target_is_fitted_and_reported():
+    c = convert("lambertian:rd=0.3,0.2,0.1", to="lambertian", metric="l2-cos", starts=1).items[0]
+    assert np.allclose(c.params["rd"], [0.3, 0.2, 0.1], atol=1e-6)
+    assert c.albedo["45"]["max_abs_difference"] < 1e-6
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("spec", ["material:alum-bronze@ngan2005/ward", "material:alumina-oxide@ngan2005/ward",
+                                  "material:black-oxidized-steel@ngan2005/cook-torrance"])
+def test_published_fits_converted_keep_their_albedo(spec):
+    c = convert(spec).items[0]
+    assert isinstance(mi.load_dict(c.params), mi.BSDF)
+    assert albedo_check(plausible.make(spec), c.params)[0]
+
+
+def test_the_command_writes_the_file_and_reports_every_field(tmp_path):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    (tmp_path / "lib.mtl").write_text("newmtl grey\nKa 0.1 0.1 0.1\nKd 0.5 0.5 0.5\nillum 1\n")
+    out = tmp_path / "out.json"
+    r = CliRunner().invoke(main, ["convert", str(tmp_path / "lib.mtl"), "--to", "mitsuba", "--out", str(out), "--json"])
+    assert r.exit_code == 0, r.output
+    (item,) = json.loads(r.output)
+    assert {"name", "source", "target", "params", "error", "albedo", "warnings"} <= set(item)
+    assert set(item["error"]) >= {"perceptual", "l2-cos", "log"} and set(item["albedo"]) == {"0", "45", "75"}
+    assert json.loads(out.read_text())["grey"] == item["params"]
+    assert any(n.startswith("Ka:") for n in item["notes"])
+
+
+@pytest.mark.parametrize("args, words", [(["--to", "mitsuba", "--out", "x.gltf"], "convert with to='gltf'"),
+                                         (["--to", "mitsuba", "--out", "x.txt"], "--out must end in .json, .xml or .gltf")])
+def test_the_command_refuses_bad_targets_and_outputs(tmp_path, args, words):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    r = CliRunner().invoke(main, ["convert", "lambertian", *args])
+    assert r.exit_code == 2 and words in r.output
+
+
+def test_a_gltf_source_converted_to_gltf_gives_back_its_parameters(tmp_path):
+    res = convert("gltf-pbr:base_color=0.9,0.6,0.3:metallic=1.0:roughness=0.3", to="gltf")
+    (c,) = res.items
+    assert c.target == "gltf" and set(c.params) == {"base_color", "metallic", "roughness"}
+    assert c.params["roughness"] == pytest.approx(0.3, rel=0.02) and c.params["metallic"] == pytest.approx(1.0)
+    assert np.allclose(c.params["base_color"], [0.9, 0.6, 0.3], atol=0.01)
+    assert max(v["max_abs_difference"] for v in c.albedo.values()) <= 0.01 and not c.warnings
+    doc = json.loads(res.write(tmp_path / "out.gltf").read_text())
+    (mat,) = doc["materials"]
+    assert mat["name"] == "gltf-pbr"
+    assert mat["pbrMetallicRoughness"]["baseColorFactor"][:3] == pytest.approx(c.params["base_color"])
+
+
+@pytest.mark.slow
+def test_the_gltf_file_of_an_mtl_conversion_passes_the_khronos_validator(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "gltf_validator", Path(__file__).resolve().parents[1] / "export" / "gltf_validator.py")
+    gv = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gv)
+    gv.require()
+    (tmp_path / "lib.mtl").write_text(DIFFUSE_MTL + "newmtl matte grey\nKd 0.4 0.4 0.4\nillum 1\n")
+    path = convert(str(tmp_path / "lib.mtl"), to="gltf").write(tmp_path / "out.gltf")
+    issues = gv.validate(path)["issues"]
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
+    assert [m["name"] for m in json.loads(path.read_text())["materials"]] == ["plasticky", "matte grey"]
+
+
+def test_the_command_names_the_bad_statement_of_an_mtl_file(tmp_path):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    (tmp_path / "bad.mtl").write_text("newmtl m\nNs -3\n")
+    r = CliRunner().invoke(main, ["convert", str(tmp_path / "bad.mtl"), "--to", "mitsuba", "--out", "x.json"])
+    assert r.exit_code == 2 and "bad.mtl:2 (material 'm'): Ns must be one number in [0, 1e+06]" in r.output
