@@ -9,19 +9,21 @@ name) or a Wavefront ``.mtl`` file (every ``newmtl``; :mod:`.mtl`) -- as
 plausible models, and fits a *target* to each:
 
 * ``"mitsuba"``: one of Mitsuba's ``diffuse``, ``roughconductor``,
-  ``roughplastic``, ``principled`` per material (:func:`.mitsuba.choose_family`),
-  or ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code
+  ``roughplastic``, ``blendbsdf`` (diffuse + roughconductor), ``principled`` per
+  material, the best of the candidates (:func:`.mitsuba.candidates`) by the figure
+  minimised, or ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code
   (:func:`.mitsuba.fit_family`);
-* ``"gltf"``: the glTF 2.0 metallic-roughness material (refused until the glTF
-  model and writer are installed: :func:`plausible.export.gltf.write_gltf`);
+* ``"gltf"``: the glTF 2.0 metallic-roughness material, the registered model
+  ``gltf-pbr`` fitted the same way, written by :func:`plausible.export.gltf.write_gltf`
+  (refused with a message where that model is not installed);
 * any registered model: :func:`plausible.fit`.
 
 Each :class:`Converted` holds the target's parameters, every fitting metric's
 figure, the albedo of source and target at 0, 45 and 75 degrees (the target's
 by Mitsuba's own sampler for a Mitsuba target) and warnings where the target
 cannot represent the source.  :meth:`Conversion.write` writes ``.json`` (a dict
-of Mitsuba dicts by name, for ``mi.load_dict``) or ``.xml`` (``<bsdf id=...>``
-elements).
+of Mitsuba dicts by name, for ``mi.load_dict``), ``.xml`` (``<bsdf id=...>``
+elements) or ``.gltf``.
 
 >>> import plausible
 >>> c = plausible.convert("lambertian:rd=0.5", to="mitsuba")        # doctest: +SKIP
@@ -36,7 +38,6 @@ import math
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -258,7 +259,7 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     """Convert every material of ``source`` to ``to`` under ``metric`` (module docstring).
 
     ``to``: ``"mitsuba"``, ``"mitsuba:TYPE"`` (``diffuse``, ``roughconductor``,
-    ``roughplastic``, ``principled``), ``"gltf"``, or a registered model's name.
+    ``roughplastic``, ``blendbsdf``, ``principled``), ``"gltf"``, or a registered model's name.
     ``metric``: one of :data:`plausible.fitting.metrics.METRICS` (the perceptual
     metric, default, fits lobe and albedo together).  ``starts``: optimiser
     starts of a registered-model fit.  Returns a :class:`Conversion`.
@@ -300,8 +301,8 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     notes = list(src.notes)
     if family is None:
         families, why = CM.candidates(src.model, src_alb[0])
-        probe = CM.Probe([src.model.peak_directions, CM._mirror])
-        target = CM._target(src.model, probe)
+        probe = CM.probe_for(src.model)
+        target = CM.source_target(src.model, probe)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
         family = r.family
@@ -399,6 +400,13 @@ def mitsuba_xml(dicts: dict) -> str:
         lines += _xml_element("bsdf", d, f" id={quoteattr(name)}", "    ")
     lines.append("</scene>")
     return "\n".join(lines) + "\n"
+
+
+def quoteattr(text) -> str:
+    """``text`` as a double-quoted XML attribute value (``xml.sax.saxutils.quoteattr``'s escapes
+    without its import, which pulls in ``urllib.request``: 78 ms at ``import plausible``)."""
+    t = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+    return '"' + t.replace("\n", "&#10;").replace("\r", "&#13;").replace("\t", "&#9;") + '"'
 
 
 def _xml_element(tag, d, attrs, pad):

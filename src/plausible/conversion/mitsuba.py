@@ -14,7 +14,9 @@ with ``B_0`` Mitsuba's value with every slot 0 (zero unless the family has an
 ``nonlinear = false``: the diffuse term is ``diffuse_reflectance / (1 - fdr)``
 times factors free of it, the coat ``specular_reflectance`` times its lobe;
 ``principled``: ``base_color`` enters the diffuse term and the metallic Schlick
-Fresnel linearly; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
+Fresnel linearly; ``blendbsdf``: ``(1 - weight)`` times a ``diffuse`` plus ``weight``
+times a ``roughconductor``, each linear in its colour; ``gltf-pbr``: see
+:data:`PLAUSIBLE_TYPES`; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
 on Mitsuba at random colours, and that it fails for ``nonlinear = true``).
 So the fit needs Mitsuba only per axis point: the bases are Mitsuba's values
 (:class:`~plausible.analysis.mitsuba_bsdf.MitsubaBSDF`, one launch over the
@@ -52,7 +54,8 @@ import numpy as np
 
 from ..fitting import metrics as M
 
-__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fit_family", "sampler_albedo"]
+__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fit_family", "probe_for",
+           "sampler_albedo", "source_target"]
 
 #: Incidences (degrees) of the albedo comparison in every report.
 REPORT_THETAS = (0.0, 45.0, 75.0)
@@ -361,7 +364,7 @@ class FamilyFit:
     figure: float = math.inf
 
 
-def _target(source, probe):
+def source_target(source, probe):
     """The source's ``f cos`` on the pairs and albedo (accurate integrator) at the probe's
     incidences, both with three channels."""
     from ..analysis import albedo_curve
@@ -379,8 +382,8 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     fam = FAMILIES[family] if isinstance(family, str) else family
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
-    probe = probe or Probe([source.peak_directions, _mirror])
-    g, A = target if target is not None else _target(source, probe)
+    probe = probe or probe_for(source)
+    g, A = target if target is not None else source_target(source, probe)
     eps = M.floor(g)
     rows = [int(np.argmin(np.abs(probe.thetas - math.radians(t)))) for t in REPORT_THETAS]
     count = [0]
@@ -430,6 +433,12 @@ def _product(lists):
 
 def _mirror(wi):
     return [np.array([-wi[0], -wi[1], wi[2]])]
+
+
+def probe_for(source) -> Probe:
+    """The :class:`Probe` of ``source``: about its peaks and the mirror direction (every
+    family's peak)."""
+    return Probe([source.peak_directions, _mirror])
 
 
 # -- choosing a family ----------------------------------------------------------------------------

@@ -130,7 +130,9 @@ class KullaConty(BxDF):
     PARAMS = (
         ModelParam("base", "cook-torrance:m=0.5:fresnel=none",
                    doc="the reciprocal single-scattering base, 'name:k=v:...' (its Fresnel factor 1)",
-                   extremes=("cook-torrance:m=0.05:fresnel=none",)),
+                   extremes=("cook-torrance:m=0.05:fresnel=none",),
+                   needs="Kulla-Conty adds a symmetric lobe to the base, which must be symmetric itself, "
+                         "f(L, V) = f(V, L), for the sum to be"),
     ) + FRESNEL_PARAMS
 
     def __init__(self, progress=None, **params):
