@@ -16,7 +16,13 @@ else of ``pkg``). It reports
 * **flags**: ``"--name"`` in a string of a ``raise`` outside :data:`FLAG_OWNERS` (a library error
   names the argument; the CLI maps it to its flag);
 * **material**: the string ``"material:"`` outside the catalogue package (one owner of the concept;
-  error messages that list the accepted forms aside).
+  error messages that list the accepted forms aside);
+* **kinds**: ``x.kind`` compared (``==``, ``!=``, ``in``, ``not in``) with one of :data:`PARAM_KINDS`
+  written as a string (or a tuple of strings) outside :data:`KIND_OWNER`: a parameter's kind owns its
+  conversions (``Param.parse``, ``to_mitsuba``, ``traversal``, ...) and says what it is
+  (``is_color``, ``numeric``, ``nests_model``), so no caller branches on the name.  A lookup in a
+  table of kinds (``p.kind in UNIFORM_KINDS``) and other attributes named ``kind`` (``dtype.kind == "f"``, a lobe's
+  ``"diffuse"``) are not counted.
 
 Used by ``tests/test_layers.py``, which also feeds it packages broken on purpose.
 """
@@ -45,6 +51,10 @@ FLAG_OWNERS = {"cli"}
 #: ``plausible.materials``, which a subpackage would replace on import).
 MATERIAL_OWNER = "catalogue"
 
+#: The names of the parameter kinds, and the module that alone may branch on them.
+PARAM_KINDS = {"scalar", "color", "choice", "lobes", "model"}
+KIND_OWNER = "params"
+
 _FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]+")
 
 
@@ -56,16 +66,19 @@ class Report:
     long_functions: list = field(default_factory=list)  # ["file:line name (N lines)"]
     flags: list = field(default_factory=list)       # ["file:line --flag"]
     material: list = field(default_factory=list)    # ["file:line"]
+    kinds: list = field(default_factory=list)       # ["file:line .kind == 'color'"]
 
     def ok(self) -> bool:
-        return not (self.cycles or self.floors or self.long_functions or self.flags or self.material)
+        return not (self.cycles or self.floors or self.long_functions or self.flags or self.material
+                    or self.kinds)
 
     def text(self) -> str:
         out = [f"import cycles: {len(self.cycles)}"]
         out += [f"  {len(c)} modules: {' '.join(c)}" for c in self.cycles]
         for title, items in (("upward imports", self.floors), (f"functions over {MAX_LINES} lines",
                              self.long_functions), ("CLI flags in library errors", self.flags),
-                             ("'material:' outside the catalogue package", self.material)):
+                             ("'material:' outside the catalogue package", self.material),
+                             (f"Param kind branches outside {KIND_OWNER}.py", self.kinds)):
             out.append(f"{title}: {len(items)}")
             out += [f"  {x}" for x in items]
         return "\n".join(out)
@@ -187,7 +200,29 @@ def check(root: Path) -> Report:
                 if (isinstance(node, ast.Constant) and isinstance(node.value, str) and node not in skip
                         and "material:" in node.value):
                     rep.material.append(f"{rel}:{node.lineno}")
+        if _floor(m) != KIND_OWNER:
+            rep.kinds += [f"{rel}:{line} {text}" for line, text in _kind_branches(tree)]
     return rep
+
+
+def _kind_branches(tree) -> list[tuple[int, str]]:
+    """(line, source) of every comparison of an attribute ``kind`` with a parameter kind's name."""
+    out = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Compare):
+            continue
+        sides = [node.left, *node.comparators]
+        if not any(isinstance(s, ast.Attribute) and s.attr == "kind" for s in sides):
+            continue
+        named = set()
+        for s in sides:
+            for c in ([s] if isinstance(s, ast.Constant) else
+                      s.elts if isinstance(s, (ast.Tuple, ast.List, ast.Set)) else []):
+                if isinstance(c, ast.Constant) and isinstance(c.value, str):
+                    named.add(c.value)
+        if named & PARAM_KINDS:
+            out.append((node.lineno, ast.unparse(node)))
+    return out
 
 
 def _strings(node) -> list[str]:

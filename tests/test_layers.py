@@ -2,7 +2,8 @@
 
 The truth is the rule of the design: no import cycle, a module imports only what lies below it,
 no function over 80 lines, a library error names arguments (not the CLI's flags), and one owner
-of ``"material:"``. The checker is shown to fail on a small package broken in each way.
+of ``"material:"``, no branch on a parameter kind's name outside params.py. The checker is
+shown to fail on a small package broken in each way.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ _spec.loader.exec_module(layers)
 
 REPORT = layers.check(ROOT / "src" / "plausible")
 
-@pytest.mark.parametrize("what", ["cycles", "floors", "long_functions", "flags", "material"])
+@pytest.mark.parametrize("what", ["cycles", "floors", "long_functions", "flags", "material", "kinds"])
 def test_plausible_keeps_its_floors(what):
     assert getattr(REPORT, what) == [], REPORT.text()
 
@@ -84,3 +85,11 @@ def test_material_specs_outside_the_catalogue_package_are_found(tmp_path):
                                           '    return s.startswith("material:")\n',
                            "catalogue/__init__.py": 'PREFIX = "material:"\n'})
     assert layers.check(_package(tmp_path, files)).material == ["pkg/registry.py:5"]
+
+
+def test_a_branch_on_a_parameter_kind_outside_params_is_found(tmp_path):
+    files = dict(CLEAN, **{"params.py": 'def f(p):\n    return p.kind == "color"\n',
+                           "plugin.py": 'def g(p, v):\n    if p.kind in ("scalar", "color"):\n        return 1\n'
+                                        '    return v.dtype.kind == "f" or p.kind in TABLE or "model" != p.kind\n'})
+    assert layers.check(_package(tmp_path, files)).kinds == [
+        "pkg/plugin.py:2 p.kind in ('scalar', 'color')", "pkg/plugin.py:4 'model' != p.kind"]

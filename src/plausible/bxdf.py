@@ -150,10 +150,10 @@ class BxDF:
         values = {}
         for p in self.PARAMS:
             value = params.get(p.name, p.default)
-            checked = p.validate(value, owner, self.CHANNELS) if p.kind == "color" else p.validate(value, owner)
+            checked = p.validate(value, owner, self.CHANNELS) if p.is_color else p.validate(value, owner)
             values[p.name] = _frozen(checked)
         sizes = {np.size(v) for p, v in zip(self.PARAMS, values.values())
-                 if p.kind == "color" and np.ndim(v) == 1}
+                 if p.is_color and np.ndim(v) == 1}
         if len(sizes) > 1:
             raise ValueError(f"{owner}: colour parameters have different channel counts {sorted(sizes)}")
         self.channels = sizes.pop() if sizes else None

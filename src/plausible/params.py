@@ -7,6 +7,7 @@ command line (``plausible models``), the Mitsuba plugins and the tests read them
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from dataclasses import dataclass, field
 from typing import Any
@@ -81,6 +82,54 @@ class Param:
             return float(value)
         return value
 
+    @property
+    def is_color(self) -> bool:
+        """A colour: a float or a trailing channel array (a texture in Mitsuba, ``vec3`` in GLSL)."""
+        return self.kind == "color"
+
+    @property
+    def numeric(self) -> bool:
+        """A number or a colour: continuous (unless :attr:`integer`), free in a fit, and
+        in Mitsuba a number or a texture (read by :mod:`plausible.mitsuba.props`; any other
+        kind's property is read by :meth:`from_mitsuba`)."""
+        return self.kind in ("scalar", "color")
+
+    @property
+    def nests_model(self) -> bool:
+        """A nested model (:class:`ModelParam`), written ``name=[spec]`` in a spec."""
+        return False
+
+    # -- Mitsuba: the plugins' properties and ``mi.traverse`` (plausible.mitsuba builds the arrays) --
+
+    def from_mitsuba(self, raw, owner: str = "model"):
+        """The value of a Mitsuba property given as a string or a sequence, validated."""
+        return self.validate(raw, owner)
+
+    def traversal(self, value):
+        """How the value appears in ``mi.traverse``: ``(numbers, integer, differentiable)``,
+        or None where it does not (a choice without a fixed list, such as a material
+        name: a string).  A choice is its index in :attr:`choices`."""
+        if self.kind == "choice":
+            return (self.choices.index(value), True, False) if self.choices else None
+        if self.integer:
+            return int(value), True, False
+        return float(value), False, True
+
+    def from_traversal(self, a, template):
+        """The value of a traversed array ``a`` (float64, flat; inverse of :meth:`traversal`).
+        ``template``: the value before, returned as given when ``a`` holds its float32 rounding."""
+        if self.kind == "choice":
+            i = int(a[0]) if a.size == 1 else -1
+            if not 0 <= i < len(self.choices):
+                raise ValueError(f"parameter '{self.name}' must be an index in [0, {len(self.choices) - 1}] "
+                                 f"of {self.range_text()}, got {a.tolist()}")
+            return self.choices[i]
+        if a.size != 1:
+            raise ValueError(f"parameter '{self.name}' must be one number, got {a.size} values")
+        if template is not None and np.float32(template) == np.float32(a[0]):
+            return template  # unchanged: the value as given, not its float32 rounding
+        return int(a[0]) if self.integer else float(a[0])
+
     def validate(self, value, owner: str = "model", channels: tuple = None):
         """Return the value converted (float, or float64 array for colours).
 
@@ -129,6 +178,166 @@ class Param:
 
 #: Channel counts a colour parameter may have (grey, RGB).
 COLOR_CHANNELS = (1, 3)
+
+#: Largest lobe exponent accepted (the same range as the Phong family's ``n``).
+N_MAX = 1e6
+
+#: How the lobes are written on the command line (shown by every error of :class:`LobesParam`).
+FORMS = ("on the command line -p lobes=cx,cy,cz,n,rho (one lobe), "
+         "-p 'lobes=cx,cy,cz,n,rho;cx,cy,cz,n,rho' or -p 'lobes=(cx, cy, cz, n, rho), (cx, cy, cz, n, rho)', "
+         "e.g. -p lobes=-1,-1,1,20,1.75")
+
+
+@dataclass(frozen=True)
+class LobesParam(Param):
+    """A list of Lafortune lobes ``(cx, cy, cz, n, rho)`` (``kind="lobes"``).
+
+    ``cx, cy, cz`` finite, ``n`` in ``[0, 1e6]``, ``rho >= 0``.  Validated into a
+    tuple of 5-tuples of floats; any other input raises :class:`ValueError`
+    naming the parameter and these ranges.
+    """
+
+    kind: str = "lobes"
+
+    def range_text(self) -> str:
+        return (f"a list of (cx, cy, cz, n, rho) tuples with cx, cy, cz finite, "
+                f"n in [0, {N_MAX:g}] and rho in [0, inf)")
+
+    def validate(self, value, owner: str = "model"):
+        where = f"{owner}: parameter '{self.name}'"
+        rng = self.range_text() + "; " + FORMS
+        if isinstance(value, str):
+            try:    # the command line's forms (plausible.params.parse_groups)
+                value = parse_groups(value)
+            except ValueError:
+                raise ValueError(f"{where} must be {rng}, got {value!r}") from None
+        if isinstance(value, bytes) or np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
+            raise ValueError(f"{where} must be {rng}, got {value!r}")
+        try:
+            items = list(value)
+        except TypeError:
+            raise ValueError(f"{where} must be {rng}, got {value!r}") from None
+        if items and all(isinstance(x, numbers.Real) for x in items):
+            if len(items) != 5:
+                raise ValueError(f"{where}: one lobe is 5 numbers (cx, cy, cz, n, rho), got {len(items)} "
+                                 f"numbers {value!r}; {rng}")
+            items = [items]     # one lobe given as its five numbers (-p lobes=-1,-1,1,20,1.75)
+        out = []
+        for i, lobe in enumerate(items):
+            try:
+                vals = [float(x) for x in lobe]
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}: lobe {i} must be a tuple of 5 numbers "
+                                 f"(cx, cy, cz, n, rho); {rng}; got {lobe!r}") from None
+            if len(vals) != 5:
+                raise ValueError(f"{where}: lobe {i} must have 5 entries (cx, cy, cz, n, rho), "
+                                 f"got {len(vals)}; {rng}")
+            cx, cy, cz, n, rho = vals
+            if not all(math.isfinite(x) for x in vals):
+                raise ValueError(f"{where}: lobe {i} has a NaN or infinite entry; {rng}; got {lobe!r}")
+            if not 0.0 <= n <= N_MAX:
+                raise ValueError(f"{where}: lobe {i} exponent n must lie in [0, {N_MAX:g}], got {n:g}")
+            if rho < 0.0:
+                raise ValueError(f"{where}: lobe {i} rho must lie in [0, inf), got {rho:g}")
+            out.append((cx, cy, cz, n, rho))
+        return tuple(out)
+
+    @property
+    def numeric(self) -> bool:
+        return False
+
+    def from_mitsuba(self, raw, owner: str = "model"):
+        """A string of ``;``-separated groups (:func:`parse_groups`) or a sequence, validated."""
+        return self.validate(parse_groups(raw) if isinstance(raw, str) else raw, owner)
+
+    def traversal(self, value):
+        """The numbers row by row, not differentiable."""
+        return np.asarray(value, dtype=np.float64).ravel(), False, False
+
+    def from_traversal(self, a, template):
+        shape = np.shape(template)
+        if a.size != int(np.prod(shape)):
+            raise ValueError(f"parameter '{self.name}' must keep its {int(np.prod(shape))} numbers "
+                             f"(shape {shape}), got {a.size}")
+        return [tuple(r) for r in a.reshape(shape)]
+
+
+def _is_model(v) -> bool:
+    """A model instance (a :class:`~plausible.bxdf.BxDF`; params lies below the contract)."""
+    return hasattr(v, "spec") and hasattr(v, "eval")
+
+
+#: Builds a model from its registry spec: :func:`plausible.registry.make_from_spec`, given by the
+#: registry as it loads (:func:`provide_model_builder`; the registry imports params, so params
+#: does not import it, not even inside a function).
+_MODEL_BUILDER = []
+
+
+def provide_model_builder(make) -> None:
+    """Give :class:`ModelParam` the function that builds a model from its spec."""
+    _MODEL_BUILDER[:] = [make]
+
+
+def _build_model(spec: str):
+    if not _MODEL_BUILDER:
+        raise RuntimeError("no model registry loaded (import plausible first)")
+    return _MODEL_BUILDER[0](spec)
+
+
+@dataclass(frozen=True)
+class ModelParam(Param):
+    """A model given by registry spec (``"reciprocal-phong:n=20:ks=1"``) or as a
+    :class:`~plausible.bxdf.BxDF` instance (``kind="model"``).  ``needs``: why the
+    owner refuses a base the registry marks as not reciprocal (in its error)."""
+
+    kind: str = "model"
+    needs: str = ("pumping-up needs a symmetric BRDF f(L, V) = f(V, L) (its energy proof, eq. 18, "
+                  "uses the symmetry)")
+
+    def range_text(self) -> str:
+        return "a registered model spec 'name:k=v:...' or a BxDF instance"
+
+    def parse(self, text: str):
+        """A spec, with or without its square brackets (``[name:k=v]``)."""
+        text = text.strip()
+        return text[1:-1] if text.startswith("[") and text.endswith("]") else text
+
+    def to_json(self, value):
+        return "[" + value.spec() + "]" if _is_model(value) else value
+
+    def to_mitsuba(self, value):
+        return value.spec() if _is_model(value) else value
+
+    def validate(self, value, owner: str = "model"):
+        where = f"{owner}: parameter '{self.name}'"
+        if _is_model(value):
+            model = value
+        elif isinstance(value, str):
+            try:
+                model = _build_model(value)
+            except ValueError as e:
+                raise ValueError(f"{where}: {e}") from None
+        else:
+            raise ValueError(f"{where} must be {self.range_text()}, got {value!r}")
+        if model.info is not None and not model.info.reciprocal:
+            raise ValueError(f"{where}: the base model {model.name!r} is not reciprocal; {self.needs}. "
+                             f"Use a reciprocal model, e.g. 'reciprocal-phong'.")
+        return model
+
+    @property
+    def numeric(self) -> bool:
+        return False
+
+    @property
+    def nests_model(self) -> bool:
+        return True
+
+    def from_mitsuba(self, raw, owner: str = "model"):
+        """The spec as given (the model validates it)."""
+        return raw
+
+    def traversal(self, value):
+        return None     # a nested model spec: a string
 
 
 @dataclass(frozen=True)

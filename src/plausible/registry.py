@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from .params import ModelInfo
+from .params import ModelInfo, provide_model_builder
 
 _REGISTRY: dict[str, ModelInfo] = {}
 _LOADED = False
@@ -202,7 +202,7 @@ def _bracket_hint(name: str, assign: list) -> str:
     except ValueError:
         return ""
     own = {p.name for p in inf.params}
-    nested_kind = {p.name for p in inf.params if p.kind == "model"}
+    nested_kind = {p.name for p in inf.params if p.nests_model}
     keys = [a.split("=", 1)[0].strip() for a in assign]
     for i, k in enumerate(keys):
         if k in nested_kind:
@@ -213,3 +213,6 @@ def _bracket_hint(name: str, assign: list) -> str:
                 inner = ":".join([assign[i].split("=", 1)[1]] + assign[i + 1:j])
                 return ":".join([name, *assign[:i], f"{k}=[{inner}]", *assign[j:]])
     return ""
+
+
+provide_model_builder(make_from_spec)

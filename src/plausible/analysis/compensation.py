@@ -32,7 +32,8 @@ from ..bxdf import BxDF
 from ..directions import split
 from ..integrals.cache import albedo_table_of
 from ..models.kulla_conty import FRESNEL_PARAMS, KullaConty
-from ..models.pumped_up import ModelParam, PumpedUp
+from ..models.pumped_up import PumpedUp
+from ..params import ModelParam
 from ..arrays.ops import NP
 from ..vec import above
 

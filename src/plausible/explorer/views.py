@@ -36,7 +36,7 @@ SLIDER_KINDS = ("scalar", "color")
 
 def _scale(p) -> str:
     """``log`` for exponents and roughnesses spanning decades, else ``linear``."""
-    if p.kind == "scalar" and p.lo >= 0 and math.isfinite(p.hi) and p.hi >= 100 * max(p.lo, 1.0):
+    if p.numeric and not p.is_color and p.lo >= 0 and math.isfinite(p.hi) and p.hi >= 100 * max(p.lo, 1.0):
         return "log"
     return "linear"
 

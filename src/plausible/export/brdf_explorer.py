@@ -124,7 +124,7 @@ def to_brdf(model, table_limit: int = BRDF_TABLE_LIMIT) -> str:
     if isinstance(table_limit, bool) or not isinstance(table_limit, int) or table_limit < 1:
         raise ValueError(f"table_limit must be a positive whole number of table values, got {table_limit!r}")
     model, notes = brdf_tables(model, table_limit)
-    wide = [p.name for p in type(model).PARAMS if p.kind == "color" and p.hi > 1.0]
+    wide = [p.name for p in type(model).PARAMS if p.is_color and p.hi > 1.0]
     shader = to_glsl(model, uniforms=True, names=lambda n: n, split_colours=wide)
     params, ranges = [], []
     for u in shader.uniforms:
@@ -134,7 +134,7 @@ def to_brdf(model, table_limit: int = BRDF_TABLE_LIMIT) -> str:
             lo, hi = slider_range(u.param, u.value[0])
             params.append(f"float {u.name} {_num(lo)} {_num(hi)} {_num(u.value[0])}")
             if (lo, hi) != (u.param.lo, u.param.hi):
-                how = "R,G,B" if u.param.kind == "color" else "VALUE"
+                how = "R,G,B" if u.param.is_color else "VALUE"
                 ranges.append(f"# {u.name}: slider {fmt(lo)} to {fmt(hi)} of the declared range "
                               f"[{fmt(u.param.lo)}, {fmt(u.param.hi)}]; for other values export with "
                               f"-p {u.param.name}={how} (the slider then spans up to 10 x the value)")

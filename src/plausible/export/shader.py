@@ -118,7 +118,7 @@ def _symbolic_params(model, specs):
     p = dict(vars(model.p))
     q = dict(vars(model.q))
     for spec in specs:
-        if spec.kind == "color":
+        if spec.is_color:
             arr = symbolic.param(spec.name, 3)
             p[spec.name] = arr
             q[spec.name] = (arr[0] + arr[1] + arr[2]) * (1.0 / 3.0)
@@ -242,10 +242,10 @@ def _uniforms(model, specs, name_of, split) -> list:
     values = []
     for s in specs:
         v = model.params[s.name]
-        if s.kind == "color" and s.name in split:
+        if s.is_color and s.name in split:
             values.extend(Uniform(f"{name_of(s.name)}_{c}", "float", (float(x),), s)
                           for c, x in zip("rgb", np.broadcast_to(v, 3)))
-        elif s.kind == "color":
+        elif s.is_color:
             values.append(Uniform(name_of(s.name), "vec3", tuple(float(x) for x in np.broadcast_to(v, 3)), s))
         else:
             values.append(Uniform(name_of(s.name), "float", (float(v),), s))

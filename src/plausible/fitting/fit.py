@@ -66,7 +66,7 @@ EXPONENT_CAP = 1e5
 
 class _Var:
     def __init__(self, p):
-        self.name, self.kind = p.name, p.kind
+        self.name, self.is_color = p.name, p.is_color
         lo = -1e3 if p.lo == -math.inf else p.lo
         hi = 1e3 if p.hi == math.inf else p.hi
         if lo > 0 and hi / lo >= 100:
@@ -200,7 +200,7 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     # others (neumann-metal's c): leave it out so that it follows them
     base = {k: v for k, v in proto.params.items() if k in fixed or info.param(k).default is not None}
     vars_ = [_Var(p) for p in _free_params(info, proto, fixed, tgt)]
-    colour_vars = [v for v in vars_ if v.kind == "color"] if tgt.channels else []
+    colour_vars = [v for v in vars_ if v.is_color] if tgt.channels else []
     tick = start(progress, starts + (tgt.channels if colour_vars else 0), f"fit {model_name}")
     # 2-3. multi-start on the channel mean, colours as scalars
     params, objectives = _fit_shared(problem, vars_, base, starts, seed, tick)
@@ -529,7 +529,7 @@ def _free_params(info, proto, fixed, tgt):
     ref = proto.eval(tgt.wi, tgt.wo)
     out = []
     for p in info.params:
-        if p.name in fixed or p.kind not in ("scalar", "color") or p.integer or p.default is None:
+        if p.name in fixed or not p.numeric or p.integer or p.default is None:
             continue
         v = _Var(p)
         changed = False

@@ -122,8 +122,8 @@ def array_safe(mi, model, name: str) -> bool:
 
 def traversable(mi, prm, value):
     """``(array, flags)`` under which a non-texture parameter appears in
-    ``mi.traverse``, or None (a nested model spec, or a choice without a fixed
-    list such as a material name: a string).
+    ``mi.traverse``, or None (:meth:`Param.traversal <plausible.params.Param.traversal>`
+    says how: a nested model spec or an open choice do not appear):
 
     * continuous scalars and grey colours: ``mi.Float`` of width 1, differentiable;
     * integers: ``mi.UInt32``; choices: ``mi.UInt32``, the index in ``prm.choices``;
@@ -131,40 +131,24 @@ def traversable(mi, prm, value):
 
     the last three non-differentiable.
     """
+    t = prm.traversal(value)
+    if t is None:
+        return None
+    numbers, integer, differentiable = t
     nd = mi.ParamFlags.NonDifferentiable
-    if prm.kind == "model" or (prm.kind == "choice" and not prm.choices):
-        return None     # a nested model spec, or an open choice (a material name): strings
-    if prm.kind == "choice":
-        return mi.UInt32(prm.choices.index(value)), nd
-    if prm.kind in ("scalar", "color"):
-        if prm.integer:
-            return mi.UInt32(int(value)), nd
-        if not _dr().is_array_v(mi.Float):  # a scalar variant: a Python float
-            return mi.Float(float(value)), mi.ParamFlags.Differentiable
-        return _dr().opaque(mi.Float, float(value)), mi.ParamFlags.Differentiable
-    return mi.Float(np.asarray(value, dtype=np.float64).ravel()), nd
+    if integer:
+        return mi.UInt32(numbers), nd
+    if not differentiable:
+        return mi.Float(numbers), nd
+    if not _dr().is_array_v(mi.Float):  # a scalar variant: a Python float
+        return mi.Float(numbers), mi.ParamFlags.Differentiable
+    return _dr().opaque(mi.Float, numbers), mi.ParamFlags.Differentiable
 
 
 def untraverse(prm, array, template):
-    """The Python value of a traversed array (inverse of :func:`traversable`)."""
-    a = np.array(array, dtype=np.float64).ravel()
-    if prm.kind == "choice":
-        i = int(a[0]) if a.size == 1 else -1
-        if not 0 <= i < len(prm.choices):
-            raise ValueError(f"parameter '{prm.name}' must be an index in [0, {len(prm.choices) - 1}] "
-                             f"of {prm.range_text()}, got {a.tolist()}")
-        return prm.choices[i]
-    if prm.kind in ("scalar", "color"):
-        if a.size != 1:
-            raise ValueError(f"parameter '{prm.name}' must be one number, got {a.size} values")
-        if template is not None and np.float32(template) == np.float32(a[0]):
-            return template  # unchanged: the value as given, not its float32 rounding
-        return int(a[0]) if prm.integer else float(a[0])
-    shape = np.shape(template)
-    if a.size != int(np.prod(shape)):
-        raise ValueError(f"parameter '{prm.name}' must keep its {int(np.prod(shape))} numbers "
-                         f"(shape {shape}), got {a.size}")
-    return [tuple(r) for r in a.reshape(shape)]
+    """The Python value of a traversed array (inverse of :func:`traversable`;
+    :meth:`Param.from_traversal <plausible.params.Param.from_traversal>`)."""
+    return prm.from_traversal(np.array(array, dtype=np.float64).ravel(), template)
 
 
 def mitsuba_progress(mi, plugin: str):
@@ -237,7 +221,7 @@ class ParamState:
                 v = prm.default if key is None else P.read_param(mi, prm, props, key, plugin)
             if isinstance(v, mi.Object):
                 self.textures[prm.name] = v
-            elif isinstance(v, np.ndarray) and prm.kind == "color":
+            elif isinstance(v, np.ndarray) and prm.is_color:
                 self.textures[prm.name] = P.srgb(mi, v, bool(prm.hi > 1.0))
             else:
                 values[prm.name] = v
@@ -400,7 +384,7 @@ class ParamState:
                 vals[name] = a
         for name, tex in self.textures.items():
             prm = self.info.param(name)
-            v = tex.eval(si) if prm.kind == "color" else channel_mean(tex.eval(si))
+            v = tex.eval(si) if prm.is_color else channel_mean(tex.eval(si))
             if not self.known[name]:
                 v = dr.clip(v, max(prm.lo, -1e30), min(prm.hi, 1e30))
             vals[name] = v

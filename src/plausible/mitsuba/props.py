@@ -1,4 +1,4 @@
-"""Mitsuba plugin properties -> model parameters, one function per kind.
+"""Mitsuba plugin properties -> model parameters.
 
 A plugin's ``Properties`` hold what the scene gave: numbers, strings, colours,
 Mitsuba textures.  This module turns them into what a model takes, and checks
@@ -6,9 +6,10 @@ textures as fully as their data allows:
 
 * :func:`given_names` -- which parameter each property sets (aliases resolved,
   unknown and repeated names refused);
-* one reader per kind: :func:`read_model_spec`, :func:`read_structured`,
-  :func:`read_choice`, :func:`read_number`, :func:`read_texture`; and
-  :func:`read_param` that picks one; :func:`metal_textures` for ``material=``;
+* :func:`read_param`: a number (:func:`read_number`) or a texture
+  (:func:`read_texture`) where the parameter takes one, else the parameter's
+  own reader (``Param.from_mitsuba``: a choice, Lafortune's lobes, a nested
+  model spec); :func:`metal_textures` for ``material=``;
 * textures: :func:`texture_texels` (every value a bitmap / checkerboard /
   constant texture can take, read from ``mi.traverse``), :func:`check_texture`
   (the parameter's range against the smallest and largest texel) and
@@ -26,8 +27,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-
-from ..params import parse_groups
 
 #: Mitsuba-style parameter names accepted by every plugin whose model has one of
 #: the candidate parameters (first candidate present wins).
@@ -187,22 +186,6 @@ def check_material(plugin: str, info, keys) -> None:
 
 # -- one reader per kind ------------------------------------------------------------
 
-def read_model_spec(prm, raw, plugin):
-    """A nested model spec (pumped_up's ``base``): the model validates it."""
-    return raw
-
-
-def read_structured(prm, raw, plugin):
-    """A structured parameter (Lafortune's ``lobes``): a string of ``;``-separated
-    groups (:func:`plausible.params.parse_groups`) or a sequence, validated."""
-    return prm.validate(parse_groups(raw) if isinstance(raw, str) else raw, plugin)
-
-
-def read_choice(prm, raw, plugin):
-    """A ``choice`` parameter: a string, validated."""
-    return prm.validate(raw, plugin)
-
-
 def read_number(prm, raw, plugin, single: bool = False):
     """A plain number (scalar, or a grey colour): validated, a Python float (int).
 
@@ -220,9 +203,9 @@ def read_texture(mi, prm, props, key, raw):
     """A colour or scalar given as a Mitsuba texture (``<rgb>``, ``bitmap``,
     ``checkerboard``, ...) or as a list of numbers (an sRGB colour)."""
     unbounded = bool(prm.hi > 1.0)
-    if prm.kind == "color" and not isinstance(raw, mi.Object) and hasattr(raw, "__len__"):
+    if prm.is_color and not isinstance(raw, mi.Object) and hasattr(raw, "__len__"):
         return srgb(mi, raw, unbounded)
-    if prm.kind == "color" and not unbounded:
+    if prm.is_color and not unbounded:
         return props.get_texture(key)
     return props.get_unbounded_texture(key)
 
@@ -234,14 +217,12 @@ def srgb(mi, values, unbounded: bool):
 
 
 def read_param(mi, prm, props, key, plugin):
-    """The value of one given parameter: a Python value or a Mitsuba texture."""
+    """The value of one given parameter: a Python value or a Mitsuba texture
+    (a string or a sequence is the parameter's own to read:
+    :meth:`Param.from_mitsuba <plausible.params.Param.from_mitsuba>`)."""
     raw = props[key]
-    if prm.kind == "model":
-        return read_model_spec(prm, raw, plugin)
-    if prm.kind not in ("scalar", "color", "choice"):
-        return read_structured(prm, raw, plugin)
-    if prm.kind == "choice" or isinstance(raw, str):
-        return read_choice(prm, raw, plugin)
+    if not prm.numeric or isinstance(raw, str):
+        return prm.from_mitsuba(raw, plugin)
     if isinstance(raw, (int, float)) and not isinstance(raw, bool):
         return read_number(prm, raw, plugin, single="double" not in mi.variant())
     return read_texture(mi, prm, props, key, raw)
@@ -426,7 +407,7 @@ def check_texture(mi, plugin: str, prm, tex) -> bool:
     texels = texture_texels(mi, tex)
     if texels is None:
         return False
-    vals = texels.mean(axis=1) if prm.kind != "color" else texels.ravel()
+    vals = texels.mean(axis=1) if not prm.is_color else texels.ravel()
     bad = ~np.isfinite(vals) | (vals < prm.lo) | (vals > prm.hi)
     if np.any(bad):
         v = vals[bad]
@@ -472,7 +453,7 @@ def values_at_uv(mi, info, textures: dict, uv) -> PointValues:
     vals = {}
     for name, tex in textures.items():
         v = eval_at_uv(mi, tex, uv)
-        vals[name] = v.mean(axis=1) if info.param(name).kind != "color" else v
+        vals[name] = v.mean(axis=1) if not info.param(name).is_color else v
     return PointValues(uv, vals)
 
 
@@ -523,7 +504,7 @@ def _show(v) -> str:
 
 
 __all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", "given_names",
-           "check_material", "conductor_name", "MITSUBA_CONDUCTORS", "read_param", "read_model_spec", "read_structured", "read_choice",
+           "check_material", "conductor_name", "MITSUBA_CONDUCTORS", "read_param",
            "read_number", "read_texture", "metal_textures", "texture_texels",
            "texture_range_known", "texture_mean", "texture_varies", "srgb_to_linear",
            "bitmap_values", "bitmap_is_raw", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",

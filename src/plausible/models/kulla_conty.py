@@ -46,11 +46,10 @@ from ..bxdf import BxDF
 from ..integrals.albedo import hemispherical_albedo
 from ..integrals.cache import albedo_table_of, horizon_albedos
 from ..arrays.ops import INV_PI, NP
-from ..params import Param
+from ..params import ModelParam, Param
 from ..registry import register
 from ..tables import AngleTable
 from ..vec import above
-from .pumped_up import ModelParam
 
 #: Gauss-Legendre nodes of ``F_avg`` (:func:`fresnel_average`, computed in the hooks): the
 #: conductor factor of gold is integrated to 1e-12 with them.

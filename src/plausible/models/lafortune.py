@@ -57,84 +57,19 @@ cosine weighted.  ``pdf`` is the same mixture.
 from __future__ import annotations
 
 import math
-import numbers
-from dataclasses import dataclass
 
 import numpy as np
 
 from .. import vec, warps
 from ..bxdf import BxDF, Lobe
 from ..arrays.ops import INV_PI, PI
-from ..params import Param, parse_groups
+from ..params import LobesParam, Param
 from ..registry import register
 from ..vec import above
-
-#: Largest lobe exponent accepted (the same range as the Phong family's ``n``).
-N_MAX = 1e6
-
-#: How the lobes are written on the command line (shown by every error of :class:`LobesParam`).
-FORMS = ("on the command line -p lobes=cx,cy,cz,n,rho (one lobe), "
-         "-p 'lobes=cx,cy,cz,n,rho;cx,cy,cz,n,rho' or -p 'lobes=(cx, cy, cz, n, rho), (cx, cy, cz, n, rho)', "
-         "e.g. -p lobes=-1,-1,1,20,1.75")
 
 #: Default: one reciprocal-Phong lobe of exponent 20 and albedo 0.5 at normal
 #: incidence (``rho = 0.5 (n + 2) / (2 pi)``), with ``rd = 0.3``.
 DEFAULT_LOBES = ((-1.0, -1.0, 1.0, 20.0, 0.5 * 22.0 / (2.0 * math.pi)),)
-
-
-@dataclass(frozen=True)
-class LobesParam(Param):
-    """A list of Lafortune lobes ``(cx, cy, cz, n, rho)`` (``kind="lobes"``).
-
-    ``cx, cy, cz`` finite, ``n`` in ``[0, 1e6]``, ``rho >= 0``.  Validated into a
-    tuple of 5-tuples of floats; any other input raises :class:`ValueError`
-    naming the parameter and these ranges.
-    """
-
-    kind: str = "lobes"
-
-    def range_text(self) -> str:
-        return (f"a list of (cx, cy, cz, n, rho) tuples with cx, cy, cz finite, "
-                f"n in [0, {N_MAX:g}] and rho in [0, inf)")
-
-    def validate(self, value, owner: str = "model"):
-        where = f"{owner}: parameter '{self.name}'"
-        rng = self.range_text() + "; " + FORMS
-        if isinstance(value, str):
-            try:    # the command line's forms (plausible.params.parse_groups)
-                value = parse_groups(value)
-            except ValueError:
-                raise ValueError(f"{where} must be {rng}, got {value!r}") from None
-        if isinstance(value, bytes) or np.ndim(value) == 0 and not isinstance(value, (list, tuple)):
-            raise ValueError(f"{where} must be {rng}, got {value!r}")
-        try:
-            items = list(value)
-        except TypeError:
-            raise ValueError(f"{where} must be {rng}, got {value!r}") from None
-        if items and all(isinstance(x, numbers.Real) for x in items):
-            if len(items) != 5:
-                raise ValueError(f"{where}: one lobe is 5 numbers (cx, cy, cz, n, rho), got {len(items)} "
-                                 f"numbers {value!r}; {rng}")
-            items = [items]     # one lobe given as its five numbers (-p lobes=-1,-1,1,20,1.75)
-        out = []
-        for i, lobe in enumerate(items):
-            try:
-                vals = [float(x) for x in lobe]
-            except (TypeError, ValueError):
-                raise ValueError(f"{where}: lobe {i} must be a tuple of 5 numbers "
-                                 f"(cx, cy, cz, n, rho); {rng}; got {lobe!r}") from None
-            if len(vals) != 5:
-                raise ValueError(f"{where}: lobe {i} must have 5 entries (cx, cy, cz, n, rho), "
-                                 f"got {len(vals)}; {rng}")
-            cx, cy, cz, n, rho = vals
-            if not all(math.isfinite(x) for x in vals):
-                raise ValueError(f"{where}: lobe {i} has a NaN or infinite entry; {rng}; got {lobe!r}")
-            if not 0.0 <= n <= N_MAX:
-                raise ValueError(f"{where}: lobe {i} exponent n must lie in [0, {N_MAX:g}], got {n:g}")
-            if rho < 0.0:
-                raise ValueError(f"{where}: lobe {i} rho must lie in [0, inf), got {rho:g}")
-            out.append((cx, cy, cz, n, rho))
-        return tuple(out)
 
 
 def c_max(lobe) -> float:

@@ -49,59 +49,14 @@ defined by an integral of its base.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from .. import fresnel, vec
 from ..bxdf import BxDF
 from ..integrals.cache import albedo_table_of, horizon_albedos, spec_of
-from ..params import Param
+from ..params import ModelParam, Param
 from ..registry import register
 from ..vec import above
-
-@dataclass(frozen=True)
-class ModelParam(Param):
-    """A model given by registry spec (``"reciprocal-phong:n=20:ks=1"``) or as a
-    :class:`~plausible.bxdf.BxDF` instance (``kind="model"``).  ``needs``: why the
-    owner refuses a base the registry marks as not reciprocal (in its error)."""
-
-    kind: str = "model"
-    needs: str = ("pumping-up needs a symmetric BRDF f(L, V) = f(V, L) (its energy proof, eq. 18, "
-                  "uses the symmetry)")
-
-    def range_text(self) -> str:
-        return "a registered model spec 'name:k=v:...' or a BxDF instance"
-
-    def parse(self, text: str):
-        """A spec, with or without its square brackets (``[name:k=v]``)."""
-        text = text.strip()
-        return text[1:-1] if text.startswith("[") and text.endswith("]") else text
-
-    def to_json(self, value):
-        return "[" + value.spec() + "]" if isinstance(value, BxDF) else value
-
-    def to_mitsuba(self, value):
-        return value.spec() if isinstance(value, BxDF) else value
-
-    def validate(self, value, owner: str = "model"):
-        where = f"{owner}: parameter '{self.name}'"
-        if isinstance(value, BxDF):
-            model = value
-        elif isinstance(value, str):
-            from ..registry import make_from_spec
-
-            try:
-                model = make_from_spec(value)
-            except ValueError as e:
-                raise ValueError(f"{where}: {e}") from None
-        else:
-            raise ValueError(f"{where} must be {self.range_text()}, got {value!r}")
-        if model.info is not None and not model.info.reciprocal:
-            raise ValueError(f"{where}: the base model {model.name!r} is not reciprocal; {self.needs}. "
-                             f"Use a reciprocal model, e.g. 'reciprocal-phong'.")
-        return model
-
 
 def check_bounded_albedo(model, owner: str = "PumpedUp", progress=None) -> None:
     """Raise ValueError when the albedo of ``model`` (a base) grows without bound
