@@ -213,6 +213,13 @@ def test_a_divergent_base_is_refused_by_both_operators():
             plausible.compensate("cook-torrance:m=0.3:geometry=none:fresnel=none", method)
 
 
+def test_a_non_reciprocal_base_is_refused_with_the_operators_reason():
+    with pytest.raises(ValueError, match="KullaConty: parameter 'base'.*'phong' is not reciprocal; Kulla-Conty"):
+        plausible.compensate("phong:n=20", "kulla-conty")
+    with pytest.raises(ValueError, match="PumpedUp: parameter 'base'.*not reciprocal; pumping-up needs"):
+        plausible.compensate("phong:n=20", "pumping-up")
+
+
 def test_bad_method_is_refused_with_the_allowed_names():
     with pytest.raises(ValueError, match="parameter 'method' must be one of pumping-up, kulla-conty"):
         plausible.compensate(CT, "energy")
@@ -227,3 +234,16 @@ def test_kulla_conty_of_an_anisotropic_base_uses_a_2d_table_and_reaches_one():
     for phi in (0.0, 45.0, 90.0):
         a = albedo_curve(m, thetas_deg=THETAS, phi_deg=phi).value
         assert np.max(np.abs(a - 1.0)) <= 5e-3
+
+
+def test_a_published_material_is_compensated_channel_by_channel():
+    """A published fit (Lambertian + Ashikhmin-Shirley, RGB): the table is its largest channel,
+    which Kulla-Conty brings to 1 (the operators' reading of a base: its deficit is lost
+    bounces); the other channels rise in proportion to their hemispherical albedos and stay <= 1."""
+    m = plausible.compensate("material:alum-bronze@ngan2005/ashikhmin-shirley", "kulla-conty")
+    th = (0.0, 40.0, 80.0)
+    a = albedo_curve(m, thetas_deg=th).value
+    b = albedo_curve(m.base, thetas_deg=th).value
+    big = int(np.argmax(b[0]))
+    assert np.allclose(a[:, big], 1.0, atol=2e-4)
+    assert np.all(a <= 1.0 + 1e-4) and np.all(a > b)

@@ -115,3 +115,19 @@ def test_ggx_at_alpha_1_compensated_passes_check_and_its_furnace(method):
     z, _, _ = furnace_residuals({"type": "plausible_compensated", "method": method, "bsdf": GGX},
                                 bsdf.model, res=24, spp=32)
     assert np.all(np.abs(z) < 4.0), z
+
+
+@pytest.mark.slow
+def test_a_coloured_nested_bsdf_keeps_every_channel_at_most_one():
+    """roughconductor of gold (its own Fresnel): the table is the largest channel's albedo, F_avg
+    the channels' hemispherical albedos over the largest; every channel's albedo rises and stays
+    <= 1, and the plugin equals its NumPy model."""
+    gold = {"type": "roughconductor", "distribution": "ggx", "alpha": 0.7, "material": "Au"}
+    bsdf = plugin(gold)
+    a, base = MitsubaBSDF(bsdf), MitsubaBSDF(mi.load_dict(gold))
+    th = [0, 40, 80]
+    got = plausible.albedo_curve(a, thetas_deg=th).value
+    was = plausible.albedo_curve(base, thetas_deg=th).value
+    assert np.all(got <= 1 + 1e-4) and np.all(got > was)
+    wi, wo = pairs()
+    assert np.allclose(a.eval(wi, wo), bsdf.model.eval(wi, wo), rtol=1e-5)

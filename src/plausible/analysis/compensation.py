@@ -201,7 +201,9 @@ def compensate(base, method: str = "kulla-conty", *, times: int = 1, correction:
                          f"base, method, times, correction, progress, fresnel, rs, eta, k")
     model = as_base(base)
     if method == "kulla-conty":
-        return KullaConty(base=model, progress=progress, **fresnel_params)
+        out = KullaConty(base=model, progress=progress, **fresnel_params)
+        _inherit(out, model)
+        return out
     if method == "incident-albedo":
         if fresnel_params:
             raise ValueError("compensate: method 'incident-albedo' takes no Fresnel parameters")

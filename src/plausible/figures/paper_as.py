@@ -26,14 +26,15 @@ def as_bsdf(nu, nv, rs, rd):
 def _patch_check(ctx, img, width, model, label, res):
     """Mean of the pixels around the image centre (normal incidence) against the
     directional albedo there; tolerance = 4 standard errors of the pixel mean plus
-    the albedo's change across the patch (the patch spans incidence 0..theta_max)."""
+    the albedo's change across the patch (the patch spans incidence 0..theta_max).
+    A colour model: the channel means (as the pixels)."""
     r = S.radius_map(res, width)
     rmax = max(0.06, 2.0 * 2 * width / res)
     sel = r <= rmax
     px = img[sel].mean(axis=-1)
     got, se = float(px.mean()), float(px.std(ddof=1) / math.sqrt(px.size))
-    a0 = float(albedo(model, direction(0.0)))
-    a1 = float(albedo(model, direction(math.asin(min(rmax, 0.999)))))
+    a0 = float(np.mean(albedo(model, direction(0.0)).value))
+    a1 = float(np.mean(albedo(model, direction(math.asin(min(rmax, 0.999)))).value))
     tol = 4 * se + abs(a1 - a0)
     ctx.measure(f"{label}: centre luminance", got, a0, tol,
                 note=f"{sel.sum()} pixels within {math.degrees(math.asin(min(rmax, .999))):.1f} deg of normal "

@@ -203,9 +203,17 @@ def read_choice(prm, raw, plugin):
     return prm.validate(raw, plugin)
 
 
-def read_number(prm, raw, plugin):
-    """A plain number (scalar, or a grey colour): validated, a Python float (int)."""
-    return prm.validate(float(raw), plugin)
+def read_number(prm, raw, plugin, single: bool = False):
+    """A plain number (scalar, or a grey colour): validated, a Python float (int).
+
+    ``single`` (a float32 variant): a float32 subnormal is read as 0.  Dr.Jit's
+    LLVM worker threads flush subnormals to zero and the calling thread, which
+    runs small batches, does not: with ``rd = 1e-39`` a batch of 3 saw a diffuse
+    lobe that a batch of 4096 did not.  Read as 0, every batch agrees."""
+    v = prm.validate(float(raw), plugin)
+    if single and isinstance(v, float) and 0.0 < abs(v) < np.finfo(np.float32).tiny:
+        return 0.0
+    return v
 
 
 def read_texture(mi, prm, props, key, raw):
@@ -235,7 +243,7 @@ def read_param(mi, prm, props, key, plugin):
     if prm.kind == "choice" or isinstance(raw, str):
         return read_choice(prm, raw, plugin)
     if isinstance(raw, (int, float)) and not isinstance(raw, bool):
-        return read_number(prm, raw, plugin)
+        return read_number(prm, raw, plugin, single="double" not in mi.variant())
     return read_texture(mi, prm, props, key, raw)
 
 

@@ -63,9 +63,12 @@ from ..vec import above
 @dataclass(frozen=True)
 class ModelParam(Param):
     """A model given by registry spec (``"reciprocal-phong:n=20:ks=1"``) or as a
-    :class:`~plausible.bxdf.BxDF` instance (``kind="model"``)."""
+    :class:`~plausible.bxdf.BxDF` instance (``kind="model"``).  ``needs``: why the
+    owner refuses a base the registry marks as not reciprocal (in its error)."""
 
     kind: str = "model"
+    needs: str = ("pumping-up needs a symmetric BRDF f(L, V) = f(V, L) (its energy proof, eq. 18, "
+                  "uses the symmetry)")
 
     def range_text(self) -> str:
         return "a registered model spec 'name:k=v:...' or a BxDF instance"
@@ -95,9 +98,8 @@ class ModelParam(Param):
         else:
             raise ValueError(f"{where} must be {self.range_text()}, got {value!r}")
         if model.info is not None and not model.info.reciprocal:
-            raise ValueError(f"{where}: the base model {model.name!r} is not reciprocal; pumping-up "
-                             f"needs a symmetric BRDF f(L, V) = f(V, L) (its energy proof, eq. 18, "
-                             f"uses the symmetry). Use a reciprocal model, e.g. 'reciprocal-phong'.")
+            raise ValueError(f"{where}: the base model {model.name!r} is not reciprocal; {self.needs}. "
+                             f"Use a reciprocal model, e.g. 'reciprocal-phong'.")
         return model
 
 

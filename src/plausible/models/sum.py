@@ -37,6 +37,7 @@ import numpy as np
 from .. import warps
 from ..bxdf import BxDF, Lobe, mixture_probabilities
 from ..kernel_params import is_data
+from ..text import fmt
 
 #: Cosines of the incidences at which a part's albedo is estimated.
 ESTIMATE_COSINES = (1.0, 0.75, 0.5, 0.25)
@@ -225,7 +226,7 @@ class Sum(BxDF):
         return any(m.mirror_cut() for m in self.parts)
 
     def __repr__(self) -> str:
-        parts = ", ".join(repr(m) if s is None else f"({m!r}, {_fmt_scale(s)})"
+        parts = ", ".join(repr(m) if s is None else f"({m!r}, {fmt(s, '.6g')})"
                           for m, s in zip(self.parts, self.scales))
         head = f"{self.label}: " if self.label else ""
         return f"Sum({head}[{parts}])"
@@ -236,12 +237,6 @@ def _scaled(fn, s):
     if s is None:
         return fn
     return lambda *args: fn(*args) * s
-
-
-def _fmt_scale(s):
-    if isinstance(s, np.ndarray):
-        return "[" + ", ".join(f"{x:.6g}" for x in s) + "]"
-    return f"{s:.6g}"
 
 
 def _claims_reciprocal(model) -> bool:
