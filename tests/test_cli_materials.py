@@ -57,6 +57,27 @@ def _table_row(material, fit):
     raise KeyError((material, fit))
 
 
+def test_the_published_table_covers_every_fit_of_every_set():
+    """docs/materials-table.csv has one row per material of every fit set (1202: the He and
+    Löw ABC sets included), and the He fits printed with eta = 1.0 (Fresnel exactly 0, scales
+    up to 1.96e9) have the largest albedo of their Lambertian term alone, at every angle."""
+    import csv
+    from pathlib import Path
+
+    from plausible import catalogue
+
+    with open(Path(__file__).resolve().parents[1] / "docs" / "materials-table.csv") as fh:
+        rows = {(r["material"], r["fit"]): r for r in csv.DictReader(fh)}
+    want = {(n, f.key) for f in catalogue.fits() for n in catalogue.materials(f.key)}
+    assert set(rows) == want and len(want) == 1202
+    he = catalogue.fit_data("ngan2005/he")
+    zero = [n for n, terms in he.items() if terms[1].params["eta"] == 1.0]
+    assert "black-obsidian" in zero and len(zero) == 4
+    for n in zero:
+        assert float(rows[(n, "ngan2005/he")]["max_albedo"]) == pytest.approx(
+            max(he[n][0].params["albedo"]), abs=1e-6)
+
+
 def test_check_materials_json_reports_the_published_table_numbers():
     """Two fits of ngan2005/ward-duer, quick: the JSON list has one report each,
     whose largest albedo and its angle are docs/materials-table.md's (full

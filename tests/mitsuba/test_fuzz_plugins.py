@@ -184,3 +184,28 @@ def test_beckmann_sample_at_u1_equal_to_one_is_a_direction(plugin):
     assert np.all(np.isfinite(wo)) and np.all(np.isfinite(w)) and np.all(np.isfinite(pdf))
     np.testing.assert_allclose(wo[:, 2], -0.8, atol=1e-6)
     assert np.all(w == 0) and np.all(pdf == 0)
+
+
+@pytest.mark.parametrize("params", [{"fresnel": "none", "rs": 0.0, "eta": 72.43, "k": 22.60},
+                                    {"fresnel": "none", "rs": 0.0, "eta": 1.46, "k": 0.0}])
+def test_kulla_conty_of_no_albedo_has_the_floor_mixture_pdf_in_float32(params):
+    """The long fuzzer's kulla_conty-random0/3: with ``rs = 0`` both shares of the sampling
+    mixture are 0, and the guard ``max(total, 1e-300)`` is 0 in float32: 0/0 made 98.5 % of the
+    pdf NaN.  Truths: the share of no albedo is 0, floored at MIX_FLOOR, so the pdf is the closed
+    mixture ``MIX_FLOOR cos/pi + (1 - MIX_FLOOR) pdf_base`` of the base's float64 NumPy pdf, and
+    the float64 NumPy model's pdf; the sampled pdf equals pdf()."""
+    from plausible.models.kulla_conty import MIX_FLOOR
+    from mi_helpers import upper_dirs
+
+    rng = np.random.default_rng(4)
+    b = mi.load_dict(to_dict("kulla_conty", params))
+    m = b.model
+    wi, wo = upper_dirs(rng, BATCH, zmin=1e-3), upper_dirs(rng, BATCH, zmin=1e-3)
+    e, p = plugin_eval_pdf(b, wi, wo)
+    assert np.all(np.isfinite(e)) and np.all(np.isfinite(p))
+    want = MIX_FLOOR * wo[:, 2] / math.pi + (1.0 - MIX_FLOOR) * m.base.pdf(wi, wo)
+    np.testing.assert_allclose(m.pdf(wi, wo), want, rtol=1e-12)
+    np.testing.assert_allclose(p, want, rtol=1e-5)
+    ws, w, spdf = plugin_sample(b, wi, rng.random((BATCH, 3)))
+    assert np.all(np.isfinite(w)) and np.all(np.isfinite(spdf))
+    np.testing.assert_allclose(spdf, plugin_eval_pdf(b, wi, ws)[1], rtol=1e-4, atol=1e-6)

@@ -194,12 +194,15 @@ class KullaConty(BxDF):
         """Probability of the cosine lobe: the multiple-scattering share of the albedo at
         ``wi``, ``F_ms (1 - E(wi)) / (F_avg E(wi) + F_ms (1 - E(wi)))`` (``F_avg`` of the
         channel means ``q``), kept in ``[MIX_FLOOR, 1 - MIX_FLOOR]`` so that each lobe covers
-        its own support."""
+        its own support.  A lobe of no albedo (``F_avg = 0``: ``fresnel='none'``, ``rs = 0``)
+        has share 0 (then ``MIX_FLOOR``); the denominator is guarded by a ``where``, not by a
+        tiny constant, which float32 (the Mitsuba variants) flushes to 0 (it made ``0 / 0``)."""
         d = self.loss_at(ops, wi)
         f_avg = fresnel_average(ops, q.fresnel, q.rs, q.eta, q.k) * self.tint_mean
         ss = f_avg * (1.0 - d)
         ms = multiple_scattering_fresnel(f_avg, self.e_avg) * d
-        t = ms / ops.maximum(ms + ss, 1e-300)
+        total = ms + ss
+        t = ops.where(total > 0, ms / ops.where(total > 0, total, 1.0), 0.0)
         return ops.minimum(ops.maximum(t, MIX_FLOOR), 1.0 - MIX_FLOOR)
 
     def _pdf(self, ops, wi, wo, q):
