@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arrays import backend as _backend
+from ..arrays.quadrature_sums import grid_sums
 from ..bxdf import BxDF
 from ..directions import as_directions
 from ..progress import start
@@ -167,7 +168,7 @@ def _jit_sums(model, kind, rules, requests, grids):
         for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
             for row, k in enumerate(idx):
                 cols[w][row, len(grids[k][c]):] = 0.0
-        for k, v in zip(idx, _backend.grid_sums(model, kind, wis, *cols[:4], tmin=cols[4], tmax=cols[5])):
+        for k, v in zip(idx, grid_sums(model, kind, wis, *cols[:4], tmin=cols[4], tmax=cols[5])):
             res[k] = v
     return res
 
@@ -230,7 +231,7 @@ def pdf_phi_sums_many(model, wi, grids) -> list:
                 theta_w = np.zeros_like(theta)     # zero weight on the padding
                 for row, a in enumerate(idx):
                     theta_w[row, :len(grids[a][1])] = grids[a][1]
-                sums = _backend.grid_sums(model, "pdf", np.repeat(wi[None, :], len(idx), axis=0), theta, theta_w,
+                sums = grid_sums(model, "pdf", np.repeat(wi[None, :], len(idx), axis=0), theta, theta_w,
                                           phi, np.ones_like(phi), per_phi=True)
                 for row, a in enumerate(idx):
                     out[a] = sums[row, :len(grids[a][2])]
