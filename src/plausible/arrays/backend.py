@@ -33,6 +33,10 @@ The rule (see ``docs/backends.md``):
 Colour models: Dr.Jit runs ``rows x channels`` lanes, each lane one channel of
 one pair, with every colour parameter read per lane from a small table: the
 same element-wise arithmetic as NumPy's broadcasting of a trailing channel axis.
+
+The kernels of the quadrature rules (many incidences in one launch) are in
+:mod:`plausible.arrays.quadrature_sums`; the pair kernels (``eval``, ``pdf``,
+``sample`` and the fit's :class:`PairKernel`) are here.
 """
 
 from __future__ import annotations

@@ -157,7 +157,7 @@ def _sums(model, kind, rules, requests):
 
 
 def _jit_sums(model, kind, rules, requests, grids):
-    """:func:`plausible.backend.grid_sums`, one launch per group of grids of about the
+    """:func:`plausible.arrays.quadrature_sums.grid_sums`, one launch per group of grids of about the
     same size (:func:`_pad_groups`: the padding to a common size adds at most
     :data:`PAD_WASTE` - 1 of the nodes; a grazing incidence's grid can be many times
     the size of a normal one's)."""
