@@ -1,4 +1,4 @@
-"""The backend switch (:mod:`plausible.backend`): the rule that picks NumPy or
+"""The backend switch (:mod:`plausible.arrays.backend`): the rule that picks NumPy or
 Dr.Jit, the same numbers on both over the registry, and a NumPy-only install."""
 
 import math

@@ -32,7 +32,7 @@ lobe they equal the model's own ``_f``, ``_pdf`` and ``_sample``
 (``tests/test_lobes.py`` checks it for every registered model).
 
 A model implements three component-wise hooks, written against an ops
-namespace (:mod:`plausible.ops`), which the NumPy front end here and the
+namespace (:mod:`plausible.arrays.ops`), which the NumPy front end here and the
 Mitsuba 3 plugins both call: ``_f(ops, wi, wo, p)``, ``_pdf(ops, wi, wo, q)``
 and ``_sample(ops, wi, u, q)``.  ``p`` holds the parameters as validated
 (colours as channel arrays); ``q`` the same with every colour reduced to its
@@ -292,7 +292,7 @@ class BxDF:
     def eval(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """BRDF value ``f(wi, wo)`` (no cosine factor).  Batches of more than
         :data:`plausible.directions.CHUNK` pairs are evaluated ``CHUNK`` pairs at a time.  ``backend``:
-        ``"auto"``, ``"numpy"`` or ``"drjit"`` (:mod:`plausible.backend`)."""
+        ``"auto"``, ``"numpy"`` or ``"drjit"`` (:mod:`plausible.arrays.backend`)."""
         (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))

@@ -4,7 +4,7 @@ A model's parameters are of two sorts:
 
 * **data** -- every float and every float channel array (``is_data``): the
   values that fits, sliders and optimisers change.  The Dr.Jit backend
-  (:mod:`plausible.backend`) hands them to the hooks as kernel *inputs*
+  (:mod:`plausible.arrays.backend`) hands them to the hooks as kernel *inputs*
   (``dr.opaque`` scalars, channel arrays gathered per lane), never as
   constants folded into the kernel, so the traced kernel is the same for
   every value and Dr.Jit's kernel cache serves it without compiling again;

@@ -5,8 +5,8 @@ the analysis built on it validate their input and shape their output with
 NumPy, and hand the arithmetic, the hooks ``_f``, ``_pdf`` and ``_sample``, to
 one of two backends of the same formulas:
 
-* ``"numpy"`` -- :data:`plausible.ops.NP`, one temporary array per operation;
-* ``"drjit"`` -- :func:`plausible.ops.drjit_ops` on ``drjit.llvm.Float64``: the
+* ``"numpy"`` -- :data:`plausible.arrays.ops.NP`, one temporary array per operation;
+* ``"drjit"`` -- :func:`plausible.arrays.ops.drjit_ops` on ``drjit.llvm.Float64``: the
   hooks are traced once per call into one LLVM kernel (float64, all cores),
   compiled on first use and then taken from Dr.Jit's kernel cache (in memory,
   and on disk in ``~/.drjit``) whenever the formula's shape and constants are

@@ -1,6 +1,6 @@
 """The symbolic ops namespace: a third backend that records what a hook computes.
 
-Beside :data:`plausible.ops.NP` (NumPy) and :func:`plausible.ops.drjit_ops`
+Beside :data:`plausible.arrays.ops.NP` (NumPy) and :func:`plausible.arrays.ops.drjit_ops`
 (Dr.Jit), :data:`SYM` runs the same formulas on :class:`Expr` values, nodes of
 an expression graph, so that the one copy of the math can be printed in another
 language (:mod:`plausible.export` prints GLSL).  Nothing in the models changes:
@@ -284,7 +284,7 @@ SYM = SimpleNamespace(
     gather=_gather,
 )
 """The symbolic namespace (see the module docstring).  ``power(b, e)`` keeps the
-contract of :mod:`plausible.ops`: defined for ``b >= 0`` with ``0**0 == 1``."""
+contract of :mod:`plausible.arrays.ops`: defined for ``b >= 0`` with ``0**0 == 1``."""
 
 
 # -- branches on parameters -------------------------------------------------------------

@@ -2,7 +2,7 @@
 Disney BRDF Explorer file.
 
 The model's own hooks are traced with the symbolic namespace
-(:mod:`plausible.symbolic`) and printed by :mod:`plausible.export.glsl`, so a
+(:mod:`plausible.arrays.symbolic`) and printed by :mod:`plausible.export.glsl`, so a
 shader computes the same formula as NumPy and Dr.Jit (to float32 rounding;
 ``tests/export/test_browser.py`` measures it in a real browser).
 

@@ -1,4 +1,4 @@
-"""Print an expression graph of :mod:`plausible.symbolic` as GLSL statements.
+"""Print an expression graph of :mod:`plausible.arrays.symbolic` as GLSL statements.
 
 The printer is the whole of the language knowledge; the formulas come from the
 models' hooks, traced once.  What it guarantees:
@@ -11,7 +11,7 @@ models' hooks, traced once.  What it guarantees:
   float32 whatever the host's default precision;
 * ``where`` becomes ``c ? a : b`` with ``a`` and ``b`` computed before, as
   NumPy and Dr.Jit compute both branches, so the formulas' guards carry over;
-* ``power(b, e)`` calls a helper with the contract of :mod:`plausible.ops`
+* ``power(b, e)`` calls a helper with the contract of :mod:`plausible.arrays.ops`
   (``b <= 0`` gives ``1`` for ``e == 0``, else ``0``; GLSL's ``pow`` is
   undefined for ``b < 0`` and for ``b == 0, e <= 0``), and which for ``b`` near
   1 computes ``exp(e log1p(b - 1))`` so that ``b^e`` keeps its digits for
@@ -89,7 +89,7 @@ def _helper_texts() -> dict:
 """)
     out["pow"] = (("log1p",), f"""{P} float {h}_pow({P} float b, {P} float e)
 {{
-    // plausible.ops.power: defined for b >= 0 with 0^0 = 1 (GLSL pow is undefined for
+    // plausible.arrays.ops.power: defined for b >= 0 with 0^0 = 1 (GLSL pow is undefined for
     // b < 0 and for b == 0, e <= 0); near b = 1 through log1p, so b^e keeps its digits for e ~ 1e4
     if (b <= 0.0) return e == 0.0 ? 1.0 : 0.0;
     {P} float d = b - 1.0;

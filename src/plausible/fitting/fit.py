@@ -298,9 +298,9 @@ class _Values:
     """One evaluation of a candidate model for the objective: ``f`` at the
     target's pairs and, with an albedo term, the :class:`_FastAlbedo` sums.
 
-    On Dr.Jit (the backend rule, :func:`plausible.backend.choose`, on all the
+    On Dr.Jit (the backend rule, :func:`plausible.arrays.backend.choose`, on all the
     pairs and albedo nodes together) every evaluation is one launch of one
-    kernel, :class:`plausible.backend.PairKernel` over the pairs and the nodes
+    kernel, :class:`plausible.arrays.backend.PairKernel` over the pairs and the nodes
     concatenated: the parameters are kernel data, so a whole fit compiles one
     kernel per model structure.  On NumPy, ``model.eval`` as before; the two
     agree to the backends' tolerance (``tests/fitting/test_fit.py``)."""

@@ -138,7 +138,7 @@ def _pad(rows):
 def _sums(model, kind, rules, requests):
     """Compute the tensor-rule sums ``requests = [(angle index, m, refine), ...]``
     and store them in ``rules[a].sums[(m, refine)]``: on Dr.Jit in one launch when
-    the backend rule says so (:mod:`plausible.backend`), else with ``model.eval``
+    the backend rule says so (:mod:`plausible.arrays.backend`), else with ``model.eval``
     (or ``pdf``) per grid (any object with the contract)."""
     if not requests:
         return

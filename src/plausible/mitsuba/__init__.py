@@ -5,7 +5,7 @@ over the registry: a model added later appears at once), plus ``merl`` for
 measured MERL tables.  A plugin holds no formula: it converts Mitsuba's
 ``SurfaceInteraction3f`` / directions into the component tuples of the model's
 hooks ``_f``, ``_pdf`` and ``_sample`` and calls them with
-:func:`plausible.ops.drjit_ops`.  The parts: :mod:`.props` (properties to
+:func:`plausible.arrays.ops.drjit_ops`.  The parts: :mod:`.props` (properties to
 parameters and textures, texture checks) and :mod:`.plugin` (the class factory,
 flags, the parameters in ``mi.traverse``).
 
