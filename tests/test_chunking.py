@@ -16,6 +16,7 @@ import pytest
 
 import plausible
 import plausible.directions as bx
+from conftest import random_upper
 
 #: Scalar and colour models, isotropic and anisotropic, analytic and tabulated.
 MODELS = [
@@ -33,8 +34,8 @@ N = 4 * SMALL + 123   # several chunks and a partial last one
 
 
 def upper(rng, shape):
-    v = rng.normal(size=shape + (3,))
-    v[..., 2] = np.abs(v[..., 2])
+    """Random upper-hemisphere directions (:func:`conftest.random_upper`) of non-unit lengths."""
+    v = random_upper(rng, int(np.prod(shape))).reshape(shape + (3,))
     return v * rng.uniform(0.5, 2.0, size=shape + (1,))   # non-unit lengths
 
 

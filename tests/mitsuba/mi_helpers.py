@@ -22,6 +22,7 @@ if VARIANT is None:
 import plausible  # noqa: E402
 import plausible.mitsuba as pm  # noqa: E402
 from plausible.params import format_groups  # noqa: E402
+from conftest import random_upper  # noqa: E402
 
 PLUGINS = pm.register()
 PLUGIN_MODELS = pm.plugin_names()
@@ -82,14 +83,9 @@ def to_dict(plugin: str, params: dict) -> dict:
 
 
 def upper_dirs(rng, n, zmin=0.05):
-    """Random unit vectors with ``z >= zmin`` (float32-representable)."""
-    out = []
-    while sum(len(o) for o in out) < n:
-        v = rng.normal(size=(n, 3))
-        v /= np.linalg.norm(v, axis=1, keepdims=True)
-        v[:, 2] = np.abs(v[:, 2])
-        out.append(v[v[:, 2] >= zmin])
-    v = np.concatenate(out)[:n].astype(np.float32).astype(np.float64)
+    """Random unit vectors with ``z >= zmin`` (:func:`conftest.random_upper`), rounded to
+    float32 and normalised again (float32-representable, for the float32 variants)."""
+    v = random_upper(rng, n, zmin).astype(np.float32).astype(np.float64)
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 

@@ -15,6 +15,7 @@ from importlib import resources
 
 import numpy as np
 import pytest
+from conftest import random_upper
 
 import plausible
 from plausible.catalogue.fit_sets import FIT_SETS
@@ -107,11 +108,7 @@ def reference(fit, name, wi, wo):
 def directions(rng, n=300):
     """Random pairs on the upper hemisphere, half of them near the mirror
     direction (within ~3 degrees), where the sharp lobes live."""
-    z = rng.uniform(0.05, 1.0, (n, 2))
-    ph = rng.uniform(0, 2 * PI, (n, 2))
-    s = np.sqrt(1 - z * z)
-    d = np.stack([s * np.cos(ph), s * np.sin(ph), z], -1)
-    wi, wo = d[:, 0], d[:, 1]
+    wi, wo = random_upper(rng, n, 0.05), random_upper(rng, n, 0.05)
     near = np.stack([-wi[:, 0], -wi[:, 1], wi[:, 2]], -1) + rng.normal(0, 0.03, (n, 3))
     near[:, 2] = np.abs(near[:, 2]) + 0.01
     near /= np.linalg.norm(near, axis=-1, keepdims=True)
