@@ -230,20 +230,4 @@ def _inherit(model, base):
         model.isotropic = base.isotropic   # the operators keep the base's symmetry about the normal
 
 
-def _inherit(model, base):
-    """What the checks read from a foreign base, passed on to the operator built on it: its
-    precision, what it cannot do, and the NumPy-only rule of the backend."""
-    if hasattr(base, "precision"):
-        model.precision = base.precision
-    na = getattr(base, "not_applicable", None)
-    if na:
-        model.not_applicable = dict(na)
-    if base in _backend._NUMPY_ONLY:
-        _backend._NUMPY_ONLY.add(model)
-    if getattr(base, "disk_cache", True) is False:
-        model.disk_cache = False
-    if isinstance(getattr(base, "isotropic", None), bool):
-        model.isotropic = base.isotropic   # the operators keep the base's symmetry about the normal
-
-
 __all__ = ["METHODS", "ForeignBase", "IncidentScaled", "as_base", "compensate"]

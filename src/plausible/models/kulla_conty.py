@@ -125,7 +125,10 @@ class KullaConty(BxDF):
     """``f = F(L.H) f_base + F_ms (1 - E(L)) (1 - E(V)) / (pi (1 - E_avg))`` (see the module
     docstring); sampled as a mixture of the base's sampler and a cosine lobe."""
 
-    LOBES = frozenset({"diffuse", "glossy"})
+    #: one glossy lobe: the multiple-scattering term is the microfacet lobe's lost energy, part
+    #: of its specular response (as in Cycles' multiscatter GGX), not a Lambertian lobe; it has
+    #: no albedo of a diffuse lobe's form, and the mixture's cosine lobe is a sampler, not a term
+    LOBES = frozenset({"glossy"})
     PARAMS = (
         ModelParam("base", "cook-torrance:m=0.5:fresnel=none",
                    doc="the reciprocal single-scattering base, 'name:k=v:...' (its Fresnel factor 1)",
