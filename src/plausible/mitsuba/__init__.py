@@ -56,31 +56,25 @@ def register(variant: str | None = None) -> list:
     Plugins are registered for the current Mitsuba variant (``variant`` sets it
     first; with none set, ``llvm_ad_rgb`` is tried, then ``scalar_rgb``).  Call
     again after switching variants.  Returns the plugin names (those of
-    :func:`plugin_names`, then ``merl`` and ``plausible_material``).
+    :func:`plugin_names`, then ``merl``, ``plausible_material`` and ``plausible_compensated``).
     """
     import mitsuba as mi
 
     if variant is not None:
         mi.set_variant(variant)
     ensure_variant()
-    out = []
     classes = _REGISTERED.setdefault(mi.variant(), {})
-    for plugin, model in plugin_names().items():
+    made = {plugin: (lambda m=model, p=plugin: make_plugin_class(p, m)) for plugin, model in plugin_names().items()}
+    made["merl"] = make_merl_class
+    from . import compensated, material
+
+    made[material.PLUGIN] = material.make_material_plugin_class        # plausible_material
+    made[compensated.PLUGIN] = compensated.make_compensated_class      # plausible_compensated
+    for plugin, make in made.items():
         if plugin not in classes:
-            cls = make_plugin_class(plugin, model)
-            classes[plugin] = cls
+            cls = classes[plugin] = make()
             mi.register_bsdf(plugin, (lambda c: (lambda props: c(props)))(cls))
-        out.append(plugin)
-    if "merl" not in classes:
-        classes["merl"] = make_merl_class()
-        mi.register_bsdf("merl", (lambda c: (lambda props: c(props)))(classes["merl"]))
-    out.append("merl")
-    from . import material
-
-    out += material.register_plugin(classes)  # plausible_material (plausible.mitsuba.material)
-    from . import compensated
-
-    out += compensated.register_plugin(classes)  # plausible_compensated (plausible.mitsuba.compensated)
+    out = list(made)
     return out
 
 

@@ -171,16 +171,4 @@ def make_compensated_class():
     return type("Plausible_compensated", (mi.BSDF,), ns)
 
 
-def register_plugin(classes: dict) -> list:
-    """Register ``plausible_compensated`` for the current variant (once; ``classes`` is
-    :func:`plausible.mitsuba.register`'s per-variant cache).  Returns ``[PLUGIN]``."""
-    import mitsuba as mi
-
-    if PLUGIN not in classes:
-        cls = make_compensated_class()
-        classes[PLUGIN] = cls
-        mi.register_bsdf(PLUGIN, lambda props: cls(props))
-    return [PLUGIN]
-
-
-__all__ = ["METHODS", "PLUGIN", "build_model", "make_compensated_class", "register_plugin"]
+__all__ = ["METHODS", "PLUGIN", "build_model", "make_compensated_class"]

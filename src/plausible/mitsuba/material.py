@@ -46,16 +46,4 @@ def make_material_plugin_class():
     return PlausibleMaterial
 
 
-def register_plugin(classes: dict) -> list:
-    """Register ``plausible_material`` for the current variant (once; ``classes``
-    is :func:`plausible.mitsuba.register`'s per-variant cache).  Returns ``[PLUGIN]``."""
-    import mitsuba as mi
-
-    if PLUGIN not in classes:
-        cls = make_material_plugin_class()
-        classes[PLUGIN] = cls
-        mi.register_bsdf(PLUGIN, lambda props: cls(props))
-    return [PLUGIN]
-
-
-__all__ = ["INFO", "Material", "PLUGIN", "make_material_plugin_class", "register_plugin"]
+__all__ = ["INFO", "Material", "PLUGIN", "make_material_plugin_class"]
