@@ -204,10 +204,18 @@ class BxDF:
         raise NotImplementedError
 
     def _pdf(self, ops, wi, wo, q):
-        raise NotImplementedError
+        """The mixture of the declared :meth:`lobes` (:func:`mixture_pdf`); a model that
+        declares none defines its own."""
+        if type(self).lobes is BxDF.lobes:
+            raise NotImplementedError
+        return mixture_pdf(ops, self, wi, wo, q)
 
     def _sample(self, ops, wi, u, q):
-        raise NotImplementedError
+        """One sample of the mixture of the declared :meth:`lobes` (:func:`mixture_sample`);
+        a model that declares none defines its own."""
+        if type(self).lobes is BxDF.lobes:
+            raise NotImplementedError
+        return mixture_sample(ops, self, wi, u, q)[0]
 
     def lobes(self) -> tuple:
         """The model's terms as :class:`Lobe` components, in the order of its

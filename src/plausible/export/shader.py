@@ -129,6 +129,8 @@ def _symbolic_params(model, specs):
 
 def _has_sampling(model) -> bool:
     cls = type(model)
+    if cls.lobes is not BxDF.lobes:
+        return True     # the mixture of its declared lobes (BxDF._pdf, BxDF._sample)
     return cls._pdf is not BxDF._pdf and cls._sample is not BxDF._sample
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe
 from ..fresnel import schlick
 from ..arrays.ops import PI
 from ..params import Param
@@ -238,12 +238,6 @@ class AshikhminShirley(BxDF):
 
     def lobe_weights(self, ops, wi, q):
         return self.spec_probability(ops, wi, q), self.diffuse_probability(ops, wi, q)
-
-    def _pdf(self, ops, wi, wo, q):
-        return mixture_pdf(ops, self, wi, wo, q)
-
-    def _sample(self, ops, wi, u, q):
-        return mixture_sample(ops, self, wi, u, q)[0]
 
 
 @register("ashikhmin-shirley-specular",

@@ -67,7 +67,7 @@ import math
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe
 from ..arrays.ops import INV_PI
 from ..params import Param
 from ..registry import register
@@ -317,12 +317,6 @@ class GltfPBR(BxDF):
 
     def _f(self, ops, wi, wo, p):
         return gltf_specular(ops, wi, wo, p) + gltf_diffuse(ops, wi, wo, p)
-
-    def _pdf(self, ops, wi, wo, q):
-        return mixture_pdf(ops, self, wi, wo, q)
-
-    def _sample(self, ops, wi, u, q):
-        return mixture_sample(ops, self, wi, u, q)[0]
 
     def _kernel_view(self, convert):
         """The NumPy front end's Dr.Jit kernels read a colour one channel per lane, so

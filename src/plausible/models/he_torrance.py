@@ -57,7 +57,7 @@ import math
 import numpy as np
 
 from .. import fresnel, special, vec, warps
-from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe
 from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -430,12 +430,6 @@ class HeTorrance(BxDF):
         s = ops.where(u[0] < 0.5, s1, s2)
         r = s * ops.sqrt(-2.0 * ops.log(ops.maximum(1.0 - u[1], 1e-300)))
         return warps.projected_offset(ops, wi, r, 2.0 * PI * u[2])
-
-    def _pdf(self, ops, wi, wo, q):
-        return mixture_pdf(ops, self, wi, wo, q)
-
-    def _sample(self, ops, wi, u, q):
-        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi):
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]

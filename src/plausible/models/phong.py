@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe
 from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -163,12 +163,6 @@ class ModifiedPhong(BxDF):
     def lobe_weights(self, ops, wi, q):
         ps = self.spec_probability(ops, q)
         return ps, 1.0 - ps
-
-    def _pdf(self, ops, wi, wo, q):
-        return mixture_pdf(ops, self, wi, wo, q)
-
-    def _sample(self, ops, wi, u, q):
-        return mixture_sample(ops, self, wi, u, q)[0]
 
 
 class _PhongLobeModel(BxDF):

@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import fresnel, vec, warps
-from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe
 from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -201,12 +201,6 @@ class Schlick(BxDF):
     def lobe_weights(self, ops, wi, q):
         """``F(n.wi)`` and ``rd`` (channel means): ``ps = F / (F + rd)``."""
         return fresnel.schlick(ops, wi[2], q.rs), q.rd
-
-    def _pdf(self, ops, wi, wo, q):
-        return mixture_pdf(ops, self, wi, wo, q)
-
-    def _sample(self, ops, wi, u, q):
-        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi: np.ndarray) -> list:
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import vec, warps
-from ..bxdf import BxDF, Lobe, mixture_pdf, mixture_sample
+from ..bxdf import BxDF, Lobe
 from ..arrays.ops import INV_PI, PI
 from ..params import Param
 from ..registry import register
@@ -139,12 +139,6 @@ class Ward(BxDF):
     def lobe_weights(self, ops, wi, q):
         ps = self.spec_probability(ops, q)
         return ps, 1.0 - ps
-
-    def _pdf(self, ops, wi, wo, q):
-        return mixture_pdf(ops, self, wi, wo, q)
-
-    def _sample(self, ops, wi, u, q):
-        return mixture_sample(ops, self, wi, u, q)[0]
 
     def peak_directions(self, wi):
         return [np.array([-wi[0], -wi[1], wi[2]]), np.array([0.0, 0.0, 1.0])]
