@@ -91,8 +91,15 @@ def read_rows(path) -> dict:
 
 
 def _append(path, row):
-    with open(path, "a") as f:
-        f.write(json.dumps(row) + "\n")
+    """One line for ``row``, after a newline if an interrupt left the last line unfinished."""
+    p = Path(path)
+    cut = False
+    if p.exists() and p.stat().st_size:
+        with open(p, "rb") as f:
+            f.seek(-1, os.SEEK_END)
+            cut = f.read(1) != b"\n"
+    with open(p, "a") as f:
+        f.write(("\n" if cut else "") + json.dumps(row) + "\n")
         f.flush()
         os.fsync(f.fileno())
 
