@@ -370,14 +370,17 @@ class FamilyFit:
     figure: float = math.inf
 
 
-def source_target(source, probe):
+def source_target(source, probe, albedo=None):
     """The source's ``f cos`` on the pairs and albedo (accurate integrator) at the probe's
-    incidences, both with three channels."""
+    incidences, both with three channels.  ``albedo``: that albedo if already computed,
+    (T, C) at the probe's incidences."""
     from ..analysis import albedo_curve
 
     f = np.asarray(source.eval(probe.wi, probe.wo), float).reshape(len(probe.wi), -1)
     g = np.broadcast_to(f * probe.wo[:, 2:3], (len(f), 3)).copy()
-    A = np.asarray(albedo_curve(source, probe.thetas).value, float).reshape(len(probe.thetas), -1)
+    if albedo is None:
+        albedo = albedo_curve(source, probe.thetas).value
+    A = np.asarray(albedo, float).reshape(len(probe.thetas), -1)
     return g, np.broadcast_to(A, (len(A), 3)).copy()
 
 

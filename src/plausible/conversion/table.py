@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -58,8 +59,22 @@ def key(row_or_job) -> str:
     return f"{to} material:{name}@{fit}"
 
 
+@lru_cache(maxsize=None)
+def code_version() -> str | None:
+    """The git commit of the code that converts (``None`` outside a git checkout)."""
+    import subprocess
+
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).parent, capture_output=True,
+                             text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None if out.returncode == 0 else None
+
+
 def convert_row(job) -> dict:
-    """One row: the conversion of ``job = (to, fit, material)`` and its figures."""
+    """One row: the conversion of ``job = (to, fit, material)``, its figures, and the
+    commit of the code (:func:`code_version`)."""
     from . import convert
 
     to, fit, name = job
@@ -70,7 +85,7 @@ def convert_row(job) -> dict:
                 l2=c.errors["l2-cos"], log=c.errors["log"], albedo_diff=diffs,
                 source_albedo_max=max(max(v["source"]) for v in c.albedo.values()),
                 conserving=not any("not energy conserving" in w for w in c.warnings),
-                params=c.params, seconds=time.monotonic() - t0)
+                params=c.params, seconds=time.monotonic() - t0, code=code_version())
 
 
 def read_rows(path) -> dict:
