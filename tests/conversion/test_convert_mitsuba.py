@@ -266,3 +266,14 @@ def test_the_command_names_the_bad_statement_of_an_mtl_file(tmp_path):
     (tmp_path / "bad.mtl").write_text("newmtl m\nNs -3\n")
     r = CliRunner().invoke(main, ["convert", str(tmp_path / "bad.mtl"), "--to", "mitsuba", "--out", "x.json"])
     assert r.exit_code == 2 and "bad.mtl:2 (material 'm'): Ns must be one number in [0, 1e+06]" in r.output
+
+
+def test_a_source_the_family_cannot_follow_is_warned_about_with_the_numbers():
+    # the reciprocal Blinn lobe falls as cos^2 (0.60 at 0 degrees, 0.08 at 75 for Ns = 30): no single
+    # roughconductor follows it, and the warning gives the difference and both albedos
+    c = convert("reciprocal-blinn:ks=0.6:n=30", to="mitsuba:roughconductor").items[0]
+    (w,) = c.warnings
+    v = c.albedo["75"]
+    assert v["source"][0] == pytest.approx(0.08, abs=0.01) and v["max_abs_difference"] > TOLERANCE
+    assert (f"75 degrees ({v['max_abs_difference']:.3f}: source {v['source'][0]:.3f}, "
+            f"target {v['target'][0]:.3f} in channel 0)") in w

@@ -351,11 +351,19 @@ def _with_textures(d, family, textures, notes):
 
 
 def _albedo_warnings(alb):
-    bad = [(t, v["max_abs_difference"]) for t, v in alb.items() if v["max_abs_difference"] > TOLERANCE]
+    """A warning naming every incidence where the target is beyond :data:`TOLERANCE`, with
+    the difference and both albedos in the channel of the largest difference."""
+    bad = [(t, v) for t, v in alb.items() if v["max_abs_difference"] > TOLERANCE]
     if not bad:
         return []
+
+    def one(t, v):
+        c = int(np.argmax(np.abs(v["difference"])))
+        return (f"{t} degrees ({v['max_abs_difference']:.3f}: source {v['source'][c]:.3f}, target "
+                f"{v['target'][c]:.3f} in channel {c})")
+
     return ["the target's albedo differs from the source's by more than "
-            f"{TOLERANCE} at " + ", ".join(f"{t} degrees ({d:.3f})" for t, d in bad)
+            f"{TOLERANCE} at " + ", ".join(one(t, v) for t, v in bad)
             + ": the target family cannot follow the source's albedo curve"]
 
 
