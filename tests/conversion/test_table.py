@@ -77,3 +77,15 @@ def test_the_command_writes_the_markdown_of_the_rows_and_refuses_a_bad_target(tm
     assert "| ngan2005/ward | 2 | 1 / 2 |" in md.read_text()
     r = CliRunner().invoke(main, ["convert-table", "--out", str(path), "--to", "blender"])
     assert r.exit_code == 2 and "--to: the table's targets are mitsuba, gltf" in r.output
+
+
+def test_worker_processes_write_every_row_once(tmp_path, monkeypatch):
+    import multiprocessing
+
+    if multiprocessing.get_start_method() != "fork":
+        pytest.skip("the fake conversion reaches the workers by fork only")
+    monkeypatch.setattr(table, "convert_row", _fake_row)
+    path = tmp_path / "t.jsonl"
+    rows = table.run_table(path, ("mitsuba", "gltf"), per_set=2, fits=["ngan2005/ward"], workers=2)
+    assert len(rows) == 4 and len(path.read_text().splitlines()) == 4
+    assert set(rows) == {table.key(j) for j in table.jobs(("mitsuba", "gltf"), 2, ["ngan2005/ward"])}
