@@ -104,13 +104,20 @@ class _FastAlbedo:
             g = hemisphere_grid(wi, peaks, m=4, levels=8)
             wo = g.wo.reshape(-1, 3)
             self.grids.append((wi, wo, (g.weight.reshape(-1) * wo[:, 2])))
+        #: every grid's weights end to end, and where each grid starts in them
+        self.weights = np.concatenate([w for _, _, w in self.grids])
+        self.starts = np.cumsum([0] + [len(w) for _, _, w in self.grids[:-1]])
+
+    def sums(self, f):
+        """The albedo of every grid from ``f`` at all the grids' nodes end to end
+        (``(nodes,)`` or ``(nodes, channels)``).  ``np.add.reduceat``, not a dot
+        product: NumPy's BLAS threads, woken by a dot of this size, spin on the
+        cores the Dr.Jit launches need (measured: a fit's CPU time 10x)."""
+        w = self.weights if f.ndim == 1 else self.weights[:, None]
+        return np.add.reduceat(w * f, self.starts, axis=0)
 
     def __call__(self, model):
-        out = []
-        for wi, wo, w in self.grids:
-            f = model.eval(wi, wo)
-            out.append(np.tensordot(w, f, axes=(0, 0)))
-        return np.array(out)
+        return self.sums(np.concatenate([model.eval(wi, wo) for wi, wo, _ in self.grids]))
 
 
 # -- results ---------------------------------------------------------------------------
@@ -295,46 +302,44 @@ def unconstrained(problem, vars_, params) -> list:
 
 
 class _Values:
-    """One evaluation of a candidate model for the objective: ``f`` at the
+    """The evaluation of candidate models for the objective: ``f`` at the
     target's pairs and, with an albedo term, the :class:`_FastAlbedo` sums.
 
-    On Dr.Jit (the backend rule, :func:`plausible.arrays.backend.choose`, on all the
-    pairs and albedo nodes together) every evaluation is one launch of one
-    kernel, :class:`plausible.arrays.backend.PairKernel` over the pairs and the nodes
-    concatenated: the parameters are kernel data, so a whole fit compiles one
-    kernel per model structure.  On NumPy, ``model.eval`` as before; the two
-    agree to the backends' tolerance (``tests/fitting/test_fit.py``)."""
+    One :class:`plausible.arrays.backend.PairKernel` over the pairs and the albedo
+    nodes concatenated, on the backend of the rule
+    (:func:`plausible.arrays.backend.choose` on all of them together): on Dr.Jit
+    every evaluation is one launch of one kernel, the parameters kernel data, so
+    a whole fit compiles one kernel per model structure; on NumPy the hooks run
+    on the validated pairs.  :meth:`many` evaluates a population of candidates
+    (the optimiser's finite-difference points) in one launch or one NumPy pass.
+    The routes agree to 1e-12 (``tests/fitting/test_fit.py``)."""
 
     def __init__(self, tgt: Target, fast: _FastAlbedo | None):
         from ..arrays import backend
         from ..directions import as_directions
 
         self.tgt, self.fast = tgt, fast
-        wi = np.broadcast_to(as_directions("wi", tgt.wi), np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo)))
+        self.shape = np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo))[:-1]
+        wi = np.broadcast_to(as_directions("wi", tgt.wi), self.shape + (3,))
         pairs = [(wi.reshape(-1, 3), np.broadcast_to(as_directions("wo", tgt.wo), wi.shape).reshape(-1, 3))]
         for gwi, gwo, _ in (fast.grids if fast else ()):
             pairs.append((np.broadcast_to(gwi, gwo.shape), gwo))
-        self.sizes = [len(a) for a, _ in pairs]
-        total = sum(self.sizes)
-        self.kernel = None
-        if backend.choose(total, None) == "drjit":
-            self.kernel = backend.PairKernel(np.concatenate([a for a, _ in pairs]),
-                                             np.concatenate([b for _, b in pairs]))
+        self.n0 = len(pairs[0][0])
+        total = sum(len(a) for a, _ in pairs)
+        self.kernel = backend.PairKernel(np.concatenate([a for a, _ in pairs]),
+                                         np.concatenate([b for _, b in pairs]), backend.choose(total, None))
+
+    def _split(self, f):
+        out = f[:self.n0].reshape(self.shape + f.shape[1:])
+        return out, (self.fast.sums(f[self.n0:]) if self.fast else None)
 
     def __call__(self, m):
         """``(f at the target's pairs, albedo sums or None)``."""
-        if self.kernel is None:
-            return m.eval(self.tgt.wi, self.tgt.wo), (self.fast(m) if self.fast else None)
-        f = self.kernel(m)
-        n0 = self.sizes[0]
-        shape = np.broadcast_shapes(np.shape(self.tgt.wi), np.shape(self.tgt.wo))[:-1] + f.shape[1:]
-        if not self.fast:
-            return f.reshape(shape), None
-        out, s = [], n0
-        for (_, _, w), k in zip(self.fast.grids, self.sizes[1:]):
-            out.append(np.tensordot(w, f[s:s + k], axes=(0, 0)))
-            s += k
-        return f[:n0].reshape(shape), np.array(out)
+        return self._split(self.kernel(m))
+
+    def many(self, models) -> list:
+        """``[self(m) for m in models]`` in one launch (one NumPy pass)."""
+        return [self._split(f) for f in self.kernel.many(models)]
 
 
 @dataclass
@@ -405,13 +410,42 @@ class _Objective:
             self.best_value, self.best_x = v, np.array(x)
         return v
 
-    def _figure(self, x, beta):
+    def many(self, xs, beta=None) -> list:
+        """``[self(x, beta) for x in xs]``, the candidates evaluated together
+        (:meth:`_Values.many`: one launch); as many evaluations counted, the
+        best point kept in the order of ``xs``."""
         pb = self.problem
+        if pb.deadline is not None and time.monotonic() > pb.deadline:
+            self.timed_out = True
+            raise _Timeout
+        xs = [np.array(x, float) for x in xs]
+        self.evaluations += len(xs)
+        models = []
+        for x in xs:
+            try:
+                models.append(self.model_at(x))
+            except ValueError:
+                models.append(None)
+        ok = [m for m in models if m is not None]
+        vals = iter(pb.values.many(ok))
+        out = []
+        for x, m in zip(xs, models):
+            v = PENALTY if m is None else self._value(next(vals), beta)
+            if beta is None and v < self.best_value:
+                self.best_value, self.best_x = v, x
+            out.append(v)
+        return out
+
+    def _figure(self, x, beta):
         try:
             m = self.model_at(x)
         except ValueError:
             return PENALTY
-        f, alb = pb.values(m)
+        return self._value(self.problem.values(m), beta)
+
+    def _value(self, values, beta):
+        pb = self.problem
+        f, alb = values
         cc = _reduce(f, pb.tgt.wo, self.c)
         a = _reduce_alb(alb, self.c) if pb.fast else None
         if beta is None:
@@ -440,7 +474,7 @@ def _optimise(fun: _Objective, x0s, tick) -> dict:
             if fun.problem.metric == "perceptual":
                 for beta in (20.0, 200.0, 2000.0):
                     r = minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
-                                 options=dict(maxiter=maxiter, eps=1e-7))
+                                 options=dict(maxiter=maxiter, eps=1e-7, **_batched(fun, beta)))
                     x = r.x
                     fun(x)
                 # derivative-free polish on the true figure (slides along constraints)
@@ -448,7 +482,7 @@ def _optimise(fun: _Objective, x0s, tick) -> dict:
                          options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
             else:
                 r = minimize(fun, x, method="L-BFGS-B", bounds=bounds,
-                             options=dict(maxiter=maxiter, eps=1e-7, ftol=1e-14, gtol=1e-10))
+                             options=dict(maxiter=maxiter, eps=1e-7, ftol=1e-14, gtol=1e-10, **_batched(fun, None)))
                 fun(r.x)
                 # derivative-free polish: L-BFGS-B stops where a constraint the model
                 # enforces by ValueError (kd + ks <= 1) cuts its line search
@@ -460,6 +494,27 @@ def _optimise(fun: _Objective, x0s, tick) -> dict:
         if fun.timed_out:
             break
     return fun.best_params(x0s[0])
+
+
+def _scipy_has_workers() -> bool:
+    """Whether SciPy's L-BFGS-B takes ``workers`` (SciPy 1.16 and later): a map
+    that evaluates all the points of one finite-difference gradient."""
+    import scipy
+
+    try:
+        return tuple(int(p) for p in scipy.__version__.split(".")[:2]) >= (1, 16)
+    except ValueError:
+        return False
+
+
+def _batched(fun: _Objective, beta) -> dict:
+    """L-BFGS-B's option that evaluates the ``n`` points of each forward-difference
+    gradient (SciPy's own steps, ``eps`` and bounds) as one population
+    (:meth:`_Objective.many`, one launch) instead of ``n`` calls; the same
+    numbers, so the same path.  Empty on a SciPy without ``workers``."""
+    if not _scipy_has_workers():
+        return {}
+    return {"workers": lambda _f, xs: fun.many(list(xs), beta)}
 
 
 def _fit_shared(problem, vars_, base, starts, seed, tick):
