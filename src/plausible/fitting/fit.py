@@ -382,7 +382,7 @@ class _Objective:
     (the square of the least-squares figures), and the best point so far is kept
     (``best_x``, ``best_value``).  A parameter set the model rejects costs
     :data:`PENALTY`.  Past the problem's deadline a call raises ``_Timeout`` and
-    sets ``timed_out``; ``evaluations`` counts the calls before it.
+    sets ``timed_out``; ``evaluations`` counts the candidates evaluated before it.
     """
 
     def __init__(self, problem: _Problem, vars_, params0, c=None):
@@ -392,6 +392,9 @@ class _Objective:
         self.evaluations = 0
         self.timed_out = False
         self.best_value, self.best_x = math.inf, None
+        #: ``(step, upper bounds)`` while L-BFGS-B runs (see :meth:`many`), else None
+        self.fd = None
+        self._cache = {}
 
     def model_at(self, x):
         ps = dict(self.params0)
@@ -400,48 +403,59 @@ class _Objective:
         return self.problem.info.cls(**ps)
 
     def __call__(self, x, beta=None):
-        pb = self.problem
-        if pb.deadline is not None and time.monotonic() > pb.deadline:
-            self.timed_out = True
-            raise _Timeout
-        self.evaluations += 1
-        v = self._figure(x, beta)
-        if beta is None and v < self.best_value:
-            self.best_value, self.best_x = v, np.array(x)
-        return v
+        return self.many([x], beta)[0]
 
     def many(self, xs, beta=None) -> list:
         """``[self(x, beta) for x in xs]``, the candidates evaluated together
-        (:meth:`_Values.many`: one launch); as many evaluations counted, the
-        best point kept in the order of ``xs``."""
+        (:meth:`_Values.many`: one launch, one NumPy pass), the best point kept in
+        the order of ``xs``.
+
+        While ``fd`` is set (``(step, upper bounds)``, during L-BFGS-B) a single
+        point ``x`` is evaluated together with the forward-difference points
+        L-BFGS-B asks for next (``x + step e_j``, ``x - step e_j`` where that
+        leaves the bounds: SciPy's rule), which wait in a cache for that request;
+        so a point and its gradient are one launch.  ``evaluations`` counts the
+        candidates evaluated."""
         pb = self.problem
         if pb.deadline is not None and time.monotonic() > pb.deadline:
             self.timed_out = True
             raise _Timeout
         xs = [np.array(x, float) for x in xs]
-        self.evaluations += len(xs)
+        keys = [(beta, x.tobytes()) for x in xs]
+        miss = [x for x, k in zip(xs, keys) if k not in self._cache]
+        if miss:
+            todo = miss + (self._fd_points(miss[0]) if self.fd is not None and len(xs) == 1 else [])
+            vals = self._evaluate(todo, beta)
+            self.evaluations += len(todo)
+            fresh = {(beta, z.tobytes()): v for z, v in zip(todo, vals)}
+            out = [fresh[k] if k in fresh else self._cache[k] for k in keys]
+            self._cache = fresh
+        else:
+            out = [self._cache[k] for k in keys]
+        if beta is None:
+            for x, v in zip(xs, out):
+                if v < self.best_value:
+                    self.best_value, self.best_x = v, x
+        return out
+
+    def _fd_points(self, x):
+        step, ub = self.fd
+        out = []
+        for j in range(len(x)):
+            z = x.copy()
+            z[j] = x[j] + (step if x[j] + step <= ub[j] else -step)
+            out.append(z)
+        return out
+
+    def _evaluate(self, xs, beta) -> list:
         models = []
         for x in xs:
             try:
                 models.append(self.model_at(x))
             except ValueError:
                 models.append(None)
-        ok = [m for m in models if m is not None]
-        vals = iter(pb.values.many(ok))
-        out = []
-        for x, m in zip(xs, models):
-            v = PENALTY if m is None else self._value(next(vals), beta)
-            if beta is None and v < self.best_value:
-                self.best_value, self.best_x = v, x
-            out.append(v)
-        return out
-
-    def _figure(self, x, beta):
-        try:
-            m = self.model_at(x)
-        except ValueError:
-            return PENALTY
-        return self._value(self.problem.values(m), beta)
+        vals = iter(self.problem.values.many([m for m in models if m is not None]))
+        return [PENALTY if m is None else self._value(next(vals), beta) for m in models]
 
     def _value(self, values, beta):
         pb = self.problem
@@ -459,62 +473,77 @@ class _Objective:
         return {v.name: v.inv(xi) for v, xi in zip(self.vars, x)}
 
 
+#: Two starts have found the same optimum when their first local optima (L-BFGS-B; for
+#: ``perceptual`` the one at ``beta = 20``) agree to ``MERGE_TOL`` of every variable's
+#: range and their objective values to ``MERGE_RTOL`` relative: the later start stops
+#: there (its further steps would repeat the earlier start's to rounding).
+MERGE_TOL, MERGE_RTOL = 1e-4, 1e-8
+#: Forward-difference step of L-BFGS-B's gradients (in the variables).
+FD_STEP = 1e-7
+
+
+def _lbfgsb(fun: _Objective, x, beta, bounds, **options):
+    """L-BFGS-B from ``x`` on ``fun`` at ``beta``, each point evaluated together
+    with its finite-difference points (:meth:`_Objective.many`)."""
+    from scipy.optimize import minimize
+
+    fun.fd = (FD_STEP, np.array([hi for _, hi in bounds], float))
+    try:
+        return minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
+                        options=dict(eps=FD_STEP, **options))
+    finally:
+        fun.fd = None
+
+
+def _same_optimum(found, x, value, spans) -> bool:
+    """Whether ``(x, value)`` repeats one of the first optima ``found`` (see :data:`MERGE_TOL`)."""
+    return any(np.all(np.abs(x - y) <= MERGE_TOL * spans) and abs(value - w) <= MERGE_RTOL * max(abs(w), 1e-300)
+               for y, w in found)
+
+
 def _optimise(fun: _Objective, x0s, tick) -> dict:
     """Step 3 from each start in ``x0s``: L-BFGS-B (on the smooth bounds at
     ``beta = 20, 200, 2000`` for ``perceptual``), then a bounded Nelder-Mead
-    polish on the true figure; ``tick()`` after each start; stop at the deadline.
-    Returns the best point's parameter values."""
+    polish on the true figure; a start whose first optimum repeats an earlier
+    start's stops there (:data:`MERGE_TOL`); ``tick()`` after each start; stop at
+    the deadline.  Returns the best point's parameter values."""
     from scipy.optimize import minimize
 
     bounds = [v.bounds for v in fun.vars]
+    spans = np.array([hi - lo for lo, hi in bounds], float)
     maxiter = fun.problem.maxiter
+    found = []
     for x0 in x0s:
         try:
             x = np.array(x0, float)
             if fun.problem.metric == "perceptual":
                 for beta in (20.0, 200.0, 2000.0):
-                    r = minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
-                                 options=dict(maxiter=maxiter, eps=1e-7, **_batched(fun, beta)))
+                    r = _lbfgsb(fun, x, beta, bounds, maxiter=maxiter)
                     x = r.x
                     fun(x)
-                # derivative-free polish on the true figure (slides along constraints)
-                minimize(fun, x, method="Nelder-Mead", bounds=bounds,
-                         options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
+                    if beta == 20.0:
+                        if _same_optimum(found, x, float(r.fun), spans):
+                            break
+                        found.append((x, float(r.fun)))
+                else:
+                    # derivative-free polish on the true figure (slides along constraints)
+                    minimize(fun, x, method="Nelder-Mead", bounds=bounds,
+                             options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
             else:
-                r = minimize(fun, x, method="L-BFGS-B", bounds=bounds,
-                             options=dict(maxiter=maxiter, eps=1e-7, ftol=1e-14, gtol=1e-10, **_batched(fun, None)))
+                r = _lbfgsb(fun, x, None, bounds, maxiter=maxiter, ftol=1e-14, gtol=1e-10)
                 fun(r.x)
-                # derivative-free polish: L-BFGS-B stops where a constraint the model
-                # enforces by ValueError (kd + ks <= 1) cuts its line search
-                minimize(fun, fun.best_x, method="Nelder-Mead", bounds=bounds,
-                         options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
+                if not _same_optimum(found, r.x, float(r.fun), spans):
+                    found.append((r.x, float(r.fun)))
+                    # derivative-free polish: L-BFGS-B stops where a constraint the model
+                    # enforces by ValueError (kd + ks <= 1) cuts its line search
+                    minimize(fun, fun.best_x, method="Nelder-Mead", bounds=bounds,
+                             options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
         except _Timeout:
             pass
         tick()
         if fun.timed_out:
             break
     return fun.best_params(x0s[0])
-
-
-def _scipy_has_workers() -> bool:
-    """Whether SciPy's L-BFGS-B takes ``workers`` (SciPy 1.16 and later): a map
-    that evaluates all the points of one finite-difference gradient."""
-    import scipy
-
-    try:
-        return tuple(int(p) for p in scipy.__version__.split(".")[:2]) >= (1, 16)
-    except ValueError:
-        return False
-
-
-def _batched(fun: _Objective, beta) -> dict:
-    """L-BFGS-B's option that evaluates the ``n`` points of each forward-difference
-    gradient (SciPy's own steps, ``eps`` and bounds) as one population
-    (:meth:`_Objective.many`, one launch) instead of ``n`` calls; the same
-    numbers, so the same path.  Empty on a SciPy without ``workers``."""
-    if not _scipy_has_workers():
-        return {}
-    return {"workers": lambda _f, xs: fun.many(list(xs), beta)}
 
 
 def _fit_shared(problem, vars_, base, starts, seed, tick):
