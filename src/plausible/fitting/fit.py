@@ -22,6 +22,10 @@ specifications with their ranges); the albedo comes from
    the previous optimum).  Every start ends with a bounded Nelder-Mead polish on
    the true figure (L-BFGS-B stalls where a constraint the model enforces by
    ``ValueError`` cuts its line search).  The best point by the true figure wins.
+   A start whose first local optimum (``beta = 20`` for ``perceptual``) repeats an
+   earlier start's (:data:`MERGE_TOL`) stops there.  Each point of L-BFGS-B is
+   evaluated together with its ``n`` forward-difference points, one population
+   of candidates in one launch (:meth:`_Objective.many`).
 4. **Colours**, for a multi-channel target: all parameters are first fitted to
    the channel mean with colours as scalars, then the colour parameters alone
    are refitted per channel with the others fixed.
