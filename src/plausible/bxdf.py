@@ -313,10 +313,10 @@ class BxDF:
                 return None, raw
             shape = np.broadcast_shapes(*(r.shape for r in raw))[:-1]
             n = int(np.prod(shape))
-            inputs = tuple(self._fused_input(name, r, shape) for name, r in zip(names, raw))
             if (n * (self.channels or 1) > _backend.FUSED_MAX_LANES
                     or _backend.choose(n, self, backend, kernel=kind) != "drjit"):
                 return None, raw
+            inputs = tuple(self._fused_input(name, r, shape) for name, r in zip(names, raw))
         except ValueError:   # the NumPy front end raises it, after the checks that come first
             return None, raw
         fused = {"eval": _backend.eval_fused, "pdf": _backend.pdf_fused}.get(kind)

@@ -3,7 +3,8 @@
 The NumPy front end (:meth:`plausible.bxdf.BxDF.eval`, ``pdf``, ``sample``) and
 the analysis built on it validate their input and shape their output with
 NumPy, and hand the arithmetic, the hooks ``_f``, ``_pdf`` and ``_sample``, to
-one of two backends of the same formulas:
+one of two backends of the same formulas (on Dr.Jit, ``eval``/``pdf``/``sample``
+check and normalise their raw input inside the kernel: :func:`eval_fused`):
 
 * ``"numpy"`` -- :data:`plausible.arrays.ops.NP`, one temporary array per operation;
 * ``"drjit"`` -- :func:`plausible.arrays.ops.drjit_ops` on ``drjit.llvm.Float64``: the
