@@ -241,6 +241,77 @@ def test_fit_as_to_cook_torrance(benchmark, metric, backend_name):
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
 
 
+#: A fit in a fresh process: its own CPU seconds (getrusage, all threads), wall
+#: seconds and load around ``plausible.fit`` alone (imports and Dr.Jit's start excluded),
+#: the evaluations, the parameters and every error figure, as JSON.
+_FIT_SCRIPT = """
+import json, os, resource, sys, time
+import plausible, scipy.optimize
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+model, target, metric = sys.argv[1:4]
+c, t = cpu(), time.perf_counter()
+r = plausible.fit(model, target, metric=metric)
+print(json.dumps(dict(cpu_s=cpu() - c, wall_s=time.perf_counter() - t, load=os.getloadavg()[0],
+                      evaluations=r.evaluations, errors=r.errors,
+                      params={k: (v.tolist() if hasattr(v, "tolist") else v) for k, v in r.params.items()})))
+"""
+
+#: The fits of issue 30's fourth session: its target (A-S to Cook-Torrance, both metrics),
+#: a published material and a colour target.
+FIT_CASES = [("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6", "perceptual"),
+             ("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6", "l2-cos"),
+             ("ashikhmin-shirley", "material:nickel@ngan2005/ward", "perceptual"),
+             ("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6,0.5,0.4", "perceptual")]
+
+
+def _fit_in(src, model, target, metric) -> dict:
+    import json
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(src)] + [p for p in sys.path if p]))
+    r = subprocess.run([sys.executable, "-c", _FIT_SCRIPT, model, target, metric], env=env,
+                       capture_output=True, text=True, check=True)
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def _max_rel(a: dict, b: dict) -> float:
+    """The largest relative difference between two dicts of numbers (or lists)."""
+    out = 0.0
+    for k, v in a.items():
+        if v is None or b.get(k) is None:
+            continue
+        x, y = np.asarray(v, float), np.asarray(b[k], float)
+        out = max(out, float(np.max(np.abs(x - y) / np.maximum(np.abs(y), 1e-300))))
+    return out
+
+
+@needs_drjit
+@pytest.mark.parametrize("model,target,metric", FIT_CASES, ids=[f"{t.split(':')[0]}-{m}" + ("-colour" if "," in t else "")
+                                                                 for _, t, m in FIT_CASES])
+def test_fit_against_reference_tree(benchmark, model, target, metric):
+    """``plausible.fit(model, target, metric=...)`` in a fresh process of this tree,
+    and, when ``PLAUSIBLE_BENCH_REF_SRC`` names the ``src`` folder of another
+    tree (``main`` before a change: ``git archive COMMIT src | tar -x -C DIR``), of
+    that tree right after it (the reference, same run): CPU and wall seconds of the
+    fit alone, evaluations, the largest relative difference of the parameters and
+    of the error figures between the two."""
+    here = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "src")
+    new = _fit_in(here, model, target, metric)
+    info = dict(wall_s=new["wall_s"], cpu_s=new["cpu_s"], evaluations=new["evaluations"], load=new["load"],
+                perceptual=new["errors"]["perceptual"], params=str(new["params"]))
+    ref_src = os.environ.get("PLAUSIBLE_BENCH_REF_SRC")
+    if ref_src:
+        ref = _fit_in(ref_src, model, target, metric)
+        info.update(ref_wall_s=ref["wall_s"], ref_cpu_s=ref["cpu_s"], ref_evaluations=ref["evaluations"],
+                    ref_load=ref["load"], ref_perceptual=ref["errors"]["perceptual"],
+                    params_max_rel=_max_rel(new["params"], ref["params"]),
+                    errors_max_rel=_max_rel(new["errors"], ref["errors"]))
+    record(benchmark, "issue-30", f"fit {model} to {target}, {metric} (fresh process)", backend="auto", op="fit",
+           n=1, **info)
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
 def _cli(*args):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
     exe = os.path.join(os.path.dirname(sys.executable), "plausible")

@@ -341,20 +341,75 @@ def kernel_view(model, dr, F, chan, reps: int):
     return model._kernel_view(convert)
 
 
-class PairKernel:
-    """``f`` of many models at fixed direction pairs on Dr.Jit: the pairs enter
-    once (unit ``(n, 3)`` arrays; the caller validates and normalises them), and
-    each call traces ``model._f`` with the model's parameters as kernel data, so
-    every model of one structure runs the same compiled kernel (a fit's
-    objective, a parameter sweep).  ``kernel(model)`` is ``model.eval(wi, wo)``:
-    ``(n,)`` or ``(n, channels)``; a model whose hooks do not run on Dr.Jit
-    gets NumPy's ``model.eval`` (the rule of :func:`run`)."""
+def lane_divmod(dr, F, x, d: int):
+    """``(x // d, x % d)`` of lane numbers ``x`` (a Float64 array of whole numbers)
+    by a whole number ``d``, in float64 arithmetic: exact for fewer than 2^40
+    lanes, and a vectorised multiply-floor is much faster than integer
+    division, which LLVM does lane by lane.  ``d`` enters as kernel data."""
+    q = dr.floor((x + 0.5) * dr.opaque(F, 1.0 / d))
+    return q, x - q * dr.opaque(F, float(d))
 
-    def __init__(self, wi: np.ndarray, wo: np.ndarray):
+
+def data_leaves(model) -> list:
+    """The data parameters of ``model`` (the values :func:`kernel_view` converts),
+    in the order its ``_kernel_view`` visits them."""
+    out = []
+
+    def record(v):
+        out.append(v)
+        return v
+
+    model._kernel_view(record)
+    return out
+
+
+def _batch_tables(models):
+    """The data leaves of ``models`` side by side, one ``(K, size)`` float array per
+    leaf; None when the models do not share one structure leaf by leaf (then they
+    cannot share a launch)."""
+    st = structure_of(models[0])
+    if st is None or any(structure_of(m) != st for m in models[1:]):
+        return None
+    per = [data_leaves(m) for m in models]
+    if any(len(p) != len(per[0]) for p in per):
+        return None
+    tables = []
+    for vals in zip(*per):
+        shapes = {np.shape(v) for v in vals}
+        if len(shapes) != 1:
+            return None
+        tables.append(np.array([np.asarray(v, dtype=np.float64).reshape(-1) for v in vals]))
+    return tables
+
+
+class PairKernel:
+    """``f`` of many models at fixed direction pairs: the pairs enter once (unit
+    ``(n, 3)`` arrays; the caller validates and normalises them).
+
+    On Dr.Jit (``backend="drjit"``, the default) each call traces ``model._f``
+    with the model's parameters as kernel data, so every model of one
+    structure runs the same compiled kernel (a fit's objective, a parameter
+    sweep).  ``kernel(model)`` is ``model.eval(wi, wo)``: ``(n,)`` or
+    ``(n, channels)``; a model whose hooks do not run on Dr.Jit gets NumPy's
+    ``model.eval`` (the rule of :func:`run`).  With ``backend="numpy"`` the
+    hooks run on NumPy (the pairs are not validated again at each call).
+
+    :meth:`many` evaluates a whole population of models of one structure (an
+    optimiser's finite-difference points, a batch of candidates) together: ``K``
+    models are ``K x n`` lanes in one Dr.Jit launch, each lane reading its
+    model's parameters from a ``K``-row table, or on NumPy one pass with every
+    parameter an array of ``K`` rows broadcast against the pairs.  The values
+    are those of ``K`` single calls to rounding (``tests/fitting/test_fit.py``:
+    1e-12)."""
+
+    def __init__(self, wi: np.ndarray, wo: np.ndarray, backend: str = "drjit"):
         self.wi = np.ascontiguousarray(wi, dtype=np.float64).reshape(-1, 3)
         self.wo = np.ascontiguousarray(wo, dtype=np.float64).reshape(-1, 3)
         if self.wi.shape != self.wo.shape:
             raise ValueError(f"PairKernel: wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
+        if backend not in ("numpy", "drjit"):
+            raise ValueError(f"PairKernel: backend must be 'numpy' or 'drjit', got {backend!r}")
+        self.backend = backend
         self.n = len(self.wi)
         self._lanes = {}
 
@@ -373,10 +428,101 @@ class PairKernel:
         f = v._f(L.ops, wi, wo, v.p)
         return L.numpy(f, self.n * c).reshape((self.n, c) if model.channels else (self.n,))
 
+    def _numpy(self, model):
+        return model._eval_block(self.wi, self.wo, (self.n,), "numpy")
+
     def __call__(self, model) -> np.ndarray:
+        if self.backend == "numpy":
+            return self._numpy(model)
         if model in _NUMPY_ONLY:
             return model.eval(self.wi, self.wo, backend="numpy")
         return run(model, "eval", lambda: model.eval(self.wi, self.wo, backend="numpy"), lambda: self._jit(model))
+
+    def many(self, models) -> list:
+        """``[self(m) for m in models]``, the models evaluated together (see the
+        class); models that cannot share a pass (different structures, hooks that
+        need their parameters as constants or NumPy) are evaluated one by one."""
+        models = list(models)
+        if len(models) < 2:
+            return [self(m) for m in models]
+        tables = _batch_tables(models)
+        if tables is not None:
+            try:
+                if self.backend == "numpy":
+                    return self._numpy_many(models, tables)
+                st = structure_of(models[0])
+                if st not in _CONSTANTS and not any(m in _NUMPY_ONLY for m in models):
+                    token = _AS_DATA.set(True)
+                    try:
+                        with _JIT_LOCK:
+                            return self._jit_many(models, tables)
+                    finally:
+                        _AS_DATA.reset(token)
+            except (_NotJit, TypeError, AttributeError, ValueError, RuntimeError, IndexError):
+                # a hook that branches on a value or calls NumPy on Dr.Jit arrays: one by one
+                pass
+        return [self(m) for m in models]
+
+    def _shape(self, model, K):
+        return (K, self.n) + ((model.channels,) if model.channels else ())
+
+    def _numpy_many(self, models, tables):
+        from .ops import NP
+
+        m0, K = models[0], len(models)
+        c = m0.channels
+        it = iter(tables)
+
+        def convert(v):
+            t = next(it)
+            if t.shape[1] == 1:         # a float: one value per model
+                return t.reshape((K, 1, 1) if c else (K, 1))
+            if c and t.shape[1] == c:   # a colour: one row of channels per model
+                return t.reshape(K, 1, c)
+            if not np.all(t == t[:1]):
+                raise _NotJit("a data array that is not a colour differs between the models")
+            return v
+
+        view = m0._kernel_view(convert)
+        comps = lambda a: tuple(x[:, None] if c else x for x in (a[:, 0], a[:, 1], a[:, 2]))  # noqa: E731
+        with np.errstate(all="ignore"):
+            f = view._f(NP, comps(self.wi), comps(self.wo), view.p)
+        out = np.array(np.broadcast_to(f, self._shape(m0, K)), dtype=np.float64)
+        return list(out)
+
+    def _jit_many(self, models, tables):
+        dr, F, U, ops = _dr()
+        m0, K = models[0], len(models)
+        c = m0.channels or 1
+        per = self.n * c
+        lane = F(dr.arange(U, K * per))
+        k, r = lane_divmod(dr, F, lane, per)
+        row, chan = lane_divmod(dr, F, r, c) if c > 1 else (r, None)
+        k, row = U(k), U(row)
+        chan = U(chan) if c > 1 else None
+        _, wi1, wo1 = self._block(1)
+        wi = tuple(dr.gather(F, x, row) for x in wi1)
+        wo = tuple(dr.gather(F, x, row) for x in wo1)
+        it = iter(tables)
+
+        def convert(v):
+            t = next(it)
+            if t.shape[1] == 1:
+                return dr.gather(F, F(t.reshape(-1)), k)
+            if c > 1 and t.shape[1] == c:
+                return dr.gather(F, F(t.reshape(-1)), k * dr.opaque(U, c) + chan)
+            if not np.all(t == t[:1]):
+                raise _NotJit("a data array that is not a colour differs between the models")
+            return v
+
+        view = m0._kernel_view(convert)
+        f = view._f(ops, wi, wo, view.p)
+        if not _is_jit(f):
+            raise _NotJit(type(f).__name__)
+        a = np.asarray(F(f).numpy(), dtype=np.float64)
+        if a.size != K * per:
+            raise _NotJit(f"{a.size} values for {K * per} lanes")
+        return list(a.reshape(self._shape(m0, K)))
 
 
 def _is_jit(x) -> bool:
@@ -530,5 +676,5 @@ def _sample(model, shape, horizon, wi_in, u_in):
 
 
 __all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "choose",
-           "drjit_available", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "pdf_fused", "requested", "run",
-           "sample_fused", "structure_of", "use"]
+           "data_leaves", "drjit_available", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "lane_divmod",
+           "pdf_fused", "requested", "run", "sample_fused", "structure_of", "use"]
