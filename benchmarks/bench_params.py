@@ -141,6 +141,73 @@ def test_mitsuba_optimisation_step_compiles_nothing(benchmark, mi, label, bsdf, 
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
 
 
+def roughconductor_from_numpy(mi, op, wi, wo, u):
+    """A call of Mitsuba's ``roughconductor`` (Beckmann, alpha 0.1, as in
+    bench_throughput.py) on NumPy arrays, as a Mitsuba user makes it: the
+    ``(n, 3)`` arrays converted to ``Vector3f`` (float32; NumPy's transposed
+    copy is the faster of the two conversions measured, Dr.Jit's own from
+    ``a.T`` the other), the interaction built, the BSDF called, its outputs
+    evaluated together and read back as NumPy arrays."""
+    import drjit as dr
+
+    bsdf = mi.load_dict({"type": "roughconductor", "distribution": "beckmann", "alpha": 0.1})
+    ctx = mi.BSDFContext()
+
+    def vec3(a):
+        return mi.Vector3f(np.ascontiguousarray(a.T, dtype=np.float32))
+
+    def call():
+        si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
+        si.wi = vec3(wi)
+        si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+        if op == "sample":
+            bs, w = bsdf.sample(ctx, si, mi.Float(np.ascontiguousarray(u[:, 0], dtype=np.float32)),
+                                mi.Point2f(np.ascontiguousarray(u[:, 1:].T, dtype=np.float32)))
+            dr.eval(bs.wo, bs.pdf, w)
+            return bs.wo.numpy(), w.numpy(), bs.pdf.numpy()
+        out = (bsdf.eval if op == "eval" else bsdf.pdf)(ctx, si, vec3(wo))
+        return out.numpy()
+
+    return call
+
+
+@needs_drjit
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+@pytest.mark.parametrize("op", ["eval", "pdf", "sample"])
+def test_api_against_roughconductor_from_numpy(benchmark, mi, pairs, op, dtype):
+    """Issue 30's "API ``eval`` of 10^6 pairs from NumPy arrays, against Mitsuba's
+    ``roughconductor`` called on the same NumPy arrays (conversion included), in
+    one run" (target: ratio <= 1), and the same for ``pdf`` and ``sample``.  The
+    API: ``m.eval(wi, wo, backend="drjit")`` of Ashikhmin-Shirley (defaults),
+    NumPy in, NumPy out, validation and normalisation included; the reference:
+    :func:`roughconductor_from_numpy` on the same arrays.  Both compiled first,
+    then ``ROUNDS`` alternating calls of each; medians of wall and CPU seconds
+    (``getrusage``: every thread of the process), and the load average.
+    ``dtype``: the arrays as given to both (float32 arrays enter the API's
+    float64 kernel without a float64 copy)."""
+    from conftest import ROUNDS
+
+    wi, wo, u = (np.asarray(a, dtype=dtype) for a in pairs)
+    m = plausible.make("ashikhmin-shirley")
+    api = {"eval": lambda: m.eval(wi, wo, backend="drjit"), "pdf": lambda: m.pdf(wi, wo, backend="drjit"),
+           "sample": lambda: m.sample(wi, u, backend="drjit")}[op]
+    ref = roughconductor_from_numpy(mi, op, wi, wo, u)
+    api(), ref()
+    times = {"api": [], "ref": []}
+    loads = [os.getloadavg()[0]]
+    for _ in range(max(ROUNDS, 5)):
+        for k, fn in (("api", api), ("ref", ref)):
+            times[k].append(timed(fn)[1:])
+        loads.append(os.getloadavg()[0])
+    med = {k: [float(np.median([t[i] for t in v])) for i in (0, 1)] for k, v in times.items()}
+    record(benchmark, "issue-30", f"API {op} of 10^6 pairs vs roughconductor from NumPy ({dtype})", backend="drjit",
+           op=op, n=len(wi), api_wall_ms=1e3 * med["api"][0], api_cpu_ms=1e3 * med["api"][1],
+           ref_wall_ms=1e3 * med["ref"][0], ref_cpu_ms=1e3 * med["ref"][1],
+           ratio_wall=med["api"][0] / med["ref"][0], ratio_cpu=med["api"][1] / med["ref"][1],
+           load_min=min(loads), load_max=max(loads), load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
 @needs_drjit
 @pytest.mark.parametrize("backend_name", ["auto", "numpy"])
 def test_check_quick_of_a_new_parameter_set(benchmark, backend_name):

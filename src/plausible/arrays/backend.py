@@ -3,7 +3,8 @@
 The NumPy front end (:meth:`plausible.bxdf.BxDF.eval`, ``pdf``, ``sample``) and
 the analysis built on it validate their input and shape their output with
 NumPy, and hand the arithmetic, the hooks ``_f``, ``_pdf`` and ``_sample``, to
-one of two backends of the same formulas:
+one of two backends of the same formulas (on Dr.Jit, ``eval``/``pdf``/``sample``
+check and normalise their raw input inside the kernel: :func:`eval_fused`):
 
 * ``"numpy"`` -- :data:`plausible.arrays.ops.NP`, one temporary array per operation;
 * ``"drjit"`` -- :func:`plausible.arrays.ops.drjit_ops` on ``drjit.llvm.Float64``: the
@@ -285,6 +286,17 @@ class _Lanes:
         flat = F(np.ascontiguousarray(a, dtype=np.float64).reshape(-1))
         return tuple(dr.gather(F, flat, self.row * 3 + k) for k in range(3))
 
+    def raw_vectors(self, a: np.ndarray, check):
+        """Components of the raw rows ``a`` (``(rows, 3)``, float32 or float64,
+        C-contiguous; neither validated nor normalised) read per lane and converted
+        to float64 in the kernel, through ``check(ops, components) -> (components,
+        bad)`` (:func:`plausible.directions.unit_lanes`, or the identity with a check
+        for ``u``).  ``a`` enters without a copy: Dr.Jit maps contiguous host memory."""
+        dr, F = self.dr, self.Float64
+        T = F if a.dtype == np.float64 else self.dr.llvm.Float32
+        flat = T(a.reshape(-1))
+        return check(self.ops, tuple(F(dr.gather(T, flat, self.row * 3 + k)) for k in range(3)))
+
     def gather_rows(self, x):
         """A per-row array (``rows`` lanes) read per lane (``rows x reps``)."""
         if self.reps == 1 or not _is_jit(x):
@@ -547,48 +559,122 @@ def pdf_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarray
     return L.numpy(v, n).reshape(shape)
 
 
+# -- the front end fused into the kernel: raw NumPy input, validation and normalisation on Dr.Jit
+
+#: Lanes of one fused launch stay below this (a ``UInt32`` index of ``rows * reps * 3``).
+FUSED_MAX_LANES = (1 << 32) // 3 - 1
+
+
+def _inputs(L, a: np.ndarray, check):
+    """``(components, bad)`` of one input of a fused call: one vector (``(3,)``,
+    validated and normalised by the caller) as opaque scalars and ``bad`` None,
+    else its raw rows through ``check`` (:meth:`_Lanes.raw_vectors`)."""
+    if a.size == 3:
+        return L.vectors(a), None
+    return L.raw_vectors(a, check)
+
+
+def _launch(L, values, masks):
+    """Evaluate ``values`` (hook results and Python numbers) and the union of the
+    bad ``masks`` in one kernel.  Returns ``(jit values, any bad)``."""
+    dr = L.dr
+    bad = None
+    for m in masks:
+        if m is not None:
+            bad = m if bad is None else bad | m
+    jit = [v for v in values if _is_jit(v)]
+    dr.eval(*jit, *(() if bad is None else (bad,)))
+    return values, bool(bad is not None and np.any(bad.numpy()))
+
+
+def eval_fused(model, wi: np.ndarray, wo: np.ndarray, shape: tuple, unit) -> tuple:
+    """:func:`eval_block` on raw ``wi``, ``wo`` (each one unit vector ``(3,)`` or
+    raw rows of ``shape``; float32 or float64, C-contiguous): ``unit`` validates and
+    normalises them in the same kernel as ``model._f``
+    (:func:`plausible.directions.unit_lanes`).  Returns ``(values, bad)``: ``bad``
+    True when a direction was NaN, infinite or zero (``values`` then mean nothing;
+    the caller's NumPy checks raise the error)."""
+    n = int(np.prod(shape))
+    c = model.channels or 1
+    L = _Lanes(n, c)
+    v = L.view(model)
+    (a, bad_a), (b, bad_b) = _inputs(L, wi, unit), _inputs(L, wo, unit)
+    (f,), bad = _launch(L, [v._f(L.ops, a, b, v.p)], (bad_a, bad_b))
+    return L.numpy(f, n * c).reshape(shape + ((model.channels,) if model.channels else ())), bad
+
+
+def pdf_fused(model, wi: np.ndarray, wo: np.ndarray, shape: tuple, unit) -> tuple:
+    """:func:`pdf_block` on raw input (as :func:`eval_fused`)."""
+    n = int(np.prod(shape))
+    L = _Lanes(n)
+    m = L.view(model)
+    (a, bad_a), (b, bad_b) = _inputs(L, wi, unit), _inputs(L, wo, unit)
+    (v,), bad = _launch(L, [m._pdf(L.ops, a, b, m.q)], (bad_a, bad_b))
+    return L.numpy(v, n).reshape(shape), bad
+
+
 def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: float):
     """``model._sample`` on Dr.Jit with the front end's bookkeeping (see
     :meth:`plausible.bxdf.BxDF._sample_block`, whose steps this repeats in the same
     order): normalise ``wo`` (a zero vector becomes ``(0, 0, -1)``), its pdf, ``f``,
     the validity mask, ``weight = f cos / pdf``.  Returns ``(wo, weight, pdf)``."""
+    wi_in = lambda L: (L.vectors(_rows(wi, shape)), None)  # noqa: E731 - the lanes of one input
+    u_in = lambda L: (L.vectors(_rows(u, shape)), None)  # noqa: E731
+    return _sample(model, shape, horizon, wi_in, u_in)[:3]
+
+
+def sample_fused(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: float, unit, interval) -> tuple:
+    """:func:`sample_block` on raw ``wi`` and ``u`` (as :func:`eval_fused`): ``unit``
+    validates and normalises ``wi`` in the kernel, ``interval(ops, components) ->
+    (components, bad)`` checks ``u``.  Returns ``(wo, weight, pdf, bad)``."""
+    return _sample(model, shape, horizon, lambda L: _inputs(L, wi, unit), lambda L: _inputs(L, u, interval))
+
+
+def _sample(model, shape, horizon, wi_in, u_in):
+    """The steps of :func:`sample_block`; ``wi_in(lanes)``, ``u_in(lanes)``: the
+    inputs' ``(components, bad)`` read per lane.  One launch (two for a colour
+    model: ``f`` per channel lane), every output evaluated together."""
     n = int(np.prod(shape))
     L = _Lanes(n)
     dr, ops = L.dr, L.ops
-    wi_c = L.vectors(_rows(wi, shape))
-    u_c = L.vectors(_rows(u, shape))
+    (wi_c, bad_wi), (u_c, bad_u) = wi_in(L), u_in(L)
     mv = L.view(model)
     wo_c = mv._sample(ops, wi_c, u_c, mv.q)
     wo_c = tuple(x if _is_jit(x) else L.Float64(float(x)) for x in wo_c)
     if not all(_is_jit(x) for x in wo_c):
         raise _NotJit("sample")
+    # the sampled direction, normalised (a zero vector becomes (0, 0, -1))
     x, y, z = wo_c
     nrm = dr.sqrt(x * x + y * y + z * z)
     pos = nrm > 0
     den = dr.select(pos, nrm, 1.0)
     x, y, z = (dr.select(pos, x / den, 0.0), dr.select(pos, y / den, 0.0), dr.select(pos, z / den, -1.0))
     wo_c = (x, y, z)
+    # its pdf, the validity mask, cos / pdf
     pdf = mv._pdf(ops, wi_c, wo_c, mv.q)
     ok = (pdf > 1e-250) & (z > horizon) & (wi_c[2] > horizon)
     cos_over_pdf = dr.select(ok, z / dr.select(ok, pdf, 1.0), 0.0)
     pdf = dr.select(ok, pdf, 0.0)
     if model.channels:
+        # f per channel lane, in a second launch that reads the first one's rows
         c = model.channels
-        dr.eval(x, y, z, cos_over_pdf, pdf)
+        cos_over_pdf = dr.select(ok, cos_over_pdf, -1.0)   # -1: not a valid sample (ratios are >= 0)
+        (x, y, z, cos_over_pdf, pdf), bad = _launch(L, [x, y, z, cos_over_pdf, pdf], (bad_wi, bad_u))
         C = _Lanes(n, c)
         wo_l = tuple(C.gather_rows(v) for v in (x, y, z))
-        wi_l = C.vectors(_rows(wi, shape))
         cv = C.view(model)
-        f = cv._f(ops, wi_l, wo_l, cv.p)
+        f = cv._f(ops, wi_in(C)[0], wo_l, cv.p)
         r = C.gather_rows(cos_over_pdf)
-        okc = C.gather_rows(dr.select(ok, L.Float64(1.0), L.Float64(0.0))) > 0.5
-        weight = L.numpy(dr.select(okc, f * r, 0.0), n * c).reshape(shape + (c,))
+        (w,), _ = _launch(C, [dr.select(r >= 0, f * r, 0.0)], ())
+        weight = L.numpy(w, n * c).reshape(shape + (c,))
     else:
         f = mv._f(ops, wi_c, wo_c, mv.p)
-        weight = L.numpy(dr.select(ok, f * cos_over_pdf, 0.0), n).reshape(shape)
-    wo = np.stack([L.numpy(v, n) for v in wo_c], axis=-1).reshape(shape + (3,))
-    return wo, weight, L.numpy(pdf, n).reshape(shape)
+        (w, x, y, z, pdf), bad = _launch(L, [dr.select(ok, f * cos_over_pdf, 0.0), x, y, z, pdf], (bad_wi, bad_u))
+        weight = L.numpy(w, n).reshape(shape)
+    wo = np.stack([L.numpy(v, n) for v in (x, y, z)], axis=-1).reshape(shape + (3,))
+    return wo, weight, L.numpy(pdf, n).reshape(shape), bad
 
 
-__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "PairKernel", "choose", "data_leaves",
-           "drjit_available", "kernel_key", "kernel_log", "kernel_view", "lane_divmod", "requested", "run", "structure_of", "use"]
+__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "choose",
+           "data_leaves", "drjit_available", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "lane_divmod",
+           "pdf_fused", "requested", "run", "sample_fused", "structure_of", "use"]
