@@ -128,16 +128,21 @@ def _guarded(job):
 
 
 def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, limit: int | None = None,
-              workers: int = 0, on_row=None) -> dict:
+              workers: int = 0, on_row=None, redo=()) -> dict:
     """Convert the :func:`jobs` not yet in ``path`` and append each row as it finishes.
 
     ``workers``: 0 runs them one after another in this process; ``n >= 1`` in ``n``
     worker processes.  ``limit``: at most this many conversions this run.
+    ``redo``: targets (``"mitsuba:diffuse"``, ...) whose rows made by other code than this
+    (:func:`code_version`) are converted again first (the new row replaces the old one).
     ``on_row(row)`` is called after each row is written.  Returns every row of ``path``."""
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
     done = read_rows(path)
-    todo = [j for j in jobs(targets, per_set, fits) if key(j) not in done]
+    redo = set(redo)
+    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and done[key(j)].get("target") in redo
+             and done[key(j)].get("code") != code_version()]
+    todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
     if limit is not None:
         todo = todo[:max(0, int(limit))]
     Path(path).parent.mkdir(parents=True, exist_ok=True)
