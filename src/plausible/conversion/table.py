@@ -53,10 +53,12 @@ def jobs(targets=TARGETS, per_set: int | None = None, fits=None) -> list[tuple]:
 
 def key(row_or_job) -> str:
     """The row's identity: ``"TO material:NAME@FIT"``."""
+    from .. import catalogue
+
     if isinstance(row_or_job, dict):
-        return f"{row_or_job['to']} material:{row_or_job['material']}@{row_or_job['fit']}"
+        return f"{row_or_job['to']} {catalogue.spec(row_or_job['material'], row_or_job['fit'])}"
     to, fit, name = row_or_job
-    return f"{to} material:{name}@{fit}"
+    return f"{to} {catalogue.spec(name, fit)}"
 
 
 @lru_cache(maxsize=None)
@@ -75,11 +77,12 @@ def code_version() -> str | None:
 def convert_row(job) -> dict:
     """One row: the conversion of ``job = (to, fit, material)``, its figures, and the
     commit of the code (:func:`code_version`)."""
+    from .. import catalogue
     from . import convert
 
     to, fit, name = job
     t0 = time.monotonic()
-    c = convert(f"material:{name}@{fit}", to=to).items[0]
+    c = convert(catalogue.spec(name, fit), to=to).items[0]
     diffs = [c.albedo[k]["max_abs_difference"] for k in ("0", "45", "75")]
     return dict(to=to, fit=fit, material=name, target=c.target, perceptual=c.errors["perceptual"],
                 l2=c.errors["l2-cos"], log=c.errors["log"], albedo_diff=diffs,
