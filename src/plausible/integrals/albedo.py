@@ -211,12 +211,16 @@ NUMPY_GROUP = 1 << 20
 
 def pdf_phi_sums_many(model, wi, grids) -> list:
     """:func:`pdf_phi_sums` of many grids ``[(theta, theta_w, phi), ...]`` at one
-    incidence ``wi``, computed together: one Dr.Jit launch for all of them when the
+    incidence ``wi`` (shape ``(3,)``) or each at its own (``wi`` of shape
+    ``(len(grids), 3)``), computed together: one Dr.Jit launch for all of them when the
     backend rule says so (for their total node count), else ``model.pdf`` on
     groups of grids (:data:`NUMPY_GROUP` nodes).  Returns one array per grid,
     of its ``len(phi)``."""
     grids = [tuple(np.asarray(x, dtype=np.float64) for x in g) for g in grids]
     wi = np.asarray(wi, dtype=np.float64)
+    wi = np.broadcast_to(wi, (len(grids), 3)) if wi.shape == (3,) else wi
+    if wi.shape != (len(grids), 3):
+        raise ValueError(f"pdf_phi_sums_many: wi must have shape (3,) or ({len(grids)}, 3), got {wi.shape}")
     n = sum(len(t) * len(p) for t, _, p in grids)
 
     def numpy():
@@ -231,8 +235,8 @@ def pdf_phi_sums_many(model, wi, grids) -> list:
                 theta_w = np.zeros_like(theta)     # zero weight on the padding
                 for row, a in enumerate(idx):
                     theta_w[row, :len(grids[a][1])] = grids[a][1]
-                sums = grid_sums(model, "pdf", np.repeat(wi[None, :], len(idx), axis=0), theta, theta_w,
-                                          phi, np.ones_like(phi), per_phi=True)
+                sums = grid_sums(model, "pdf", np.ascontiguousarray(wi[idx]), theta, theta_w,
+                                 phi, np.ones_like(phi), per_phi=True)
                 for row, a in enumerate(idx):
                     out[a] = sums[row, :len(grids[a][2])]
             return out
@@ -262,18 +266,22 @@ def _pad_groups(shapes) -> list:
 
 
 def _numpy_phi_sums(model, wi, grids):
+    """:func:`pdf_phi_sums_many` with ``model.pdf`` (``wi``: one row per grid)."""
     out, group, size = [], [], 0
+    one = bool(np.all(wi == wi[:1]))    # one incidence: a (3,) wi, as the contract's simplest call
     for k, g in enumerate(grids):
-        group.append(g)
+        group.append(k)
         size += len(g[0]) * len(g[2])
         if size >= NUMPY_GROUP or k == len(grids) - 1:
-            wo = np.concatenate([_wo_grid(t, p).reshape(-1, 3) for t, _, p in group])
-            pdf = model.pdf(wi, wo)
+            wo = np.concatenate([_wo_grid(grids[a][0], grids[a][2]).reshape(-1, 3) for a in group])
+            counts = [len(grids[a][0]) * len(grids[a][2]) for a in group]
+            pdf = model.pdf(np.array(wi[0]) if one else np.repeat(wi[group], counts, axis=0), wo)
             at = 0
-            for t, w, p in group:
-                cell = pdf[at:at + len(t) * len(p)].reshape(len(t), len(p))
+            for a, c in zip(group, counts):
+                t, w, p = grids[a]
+                cell = pdf[at:at + c].reshape(len(t), len(p))
                 out.append((cell * w[:, None]).sum(axis=0))
-                at += len(t) * len(p)
+                at += c
             group, size = [], 0
     return out
 
