@@ -120,7 +120,7 @@ def guard_albedos(model, wis, n: int = GUARD_SAMPLES, seed: int = 11):
 
 
 def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
-           guard: bool | None = None, progress=None) -> PropertyResult:
+           guard: bool | None = None, progress=None, results=None) -> PropertyResult:
     """Max directional albedo over a grid of incidence directions (azimuths too
     for anisotropic models), by default from the normal to ``cos(theta) = 1e-9``;
     passes when ``max a <= 1 + tol``.  ``tol`` matches the
@@ -136,11 +136,14 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     (``passed`` False, ``unresolved`` True) where an unresolved incidence could
     exceed ``1 + tol`` by either estimate; else passes.  So a lobe the quadrature
     cannot resolve is reported as such, not as energy gained.
-    ``progress``: a :mod:`plausible.progress` factory, ticked per direction."""
+    ``progress``: a :mod:`plausible.progress` factory, ticked per direction.
+    ``results``: the albedos (:func:`~plausible.integrals.albedo.albedos`) of the
+    directions of :func:`energy_directions`, if the caller computed them
+    (:func:`plausible.check` does, together with the sampling check's)."""
     dirs = energy_directions(model, thetas_deg, phis_deg)
     tick = start(progress, len(dirs), f"energy {model.name}")
     wis = [direction(math.radians(t), math.radians(p)) for t, p in dirs]
-    res = albedos(model, wis)
+    res = albedos(model, wis) if results is None else list(results)
     if guard is None:
         guard = callable(getattr(model, "sample", None)) and "sampling" not in getattr(model, "not_applicable", {})
     mcs = guard_albedos(model, wis) if guard else (np.full(len(wis), np.nan), np.full(len(wis), np.nan))
