@@ -649,6 +649,61 @@ def convert_cmd(source, to, out, metric, as_json):
     console.print(f"wrote {escape(str(path))}")
 
 
+@main.command("convert-table")
+@click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE.jsonl",
+              help="Rows, one JSON line per conversion, appended as each finishes; rows already there are skipped.")
+@click.option("--to", "to", default="mitsuba,gltf", show_default=True, metavar="A,B",
+              help="Targets (comma-separated: mitsuba, gltf).")
+@click.option("--fits", metavar="A,B,...", help="Fit sets (default: every loadable one).")
+@click.option("--per-set", type=click.IntRange(1), help="Materials per fit set (alphabetical; default: all).")
+@click.option("--limit", type=click.IntRange(0), help="At most this many conversions this run (0: only --markdown).")
+@click.option("--workers", type=click.IntRange(0), default=0, show_default=True,
+              help="Worker processes (0: one conversion after another in this process).")
+@click.option("--markdown", "md", type=click.Path(dir_okay=False), metavar="FILE.md",
+              help="Write the table (summary per fit set, every row) from every row of --out.")
+def convert_table_cmd(out, to, fits, per_set, limit, workers, md):
+    """Convert every published fit (material:NAME@FIT) to each target, resumably (docs/convert.md).
+
+    Round robin over the fit sets; interrupt at any time and run the same command
+    again to go on.
+    """
+    from pathlib import Path
+
+    from rich.markup import escape
+
+    from .conversion import table
+
+    targets = [t.strip() for t in to.split(",") if t.strip()]
+    bad = [t for t in targets if t not in table.TARGETS]
+    if bad:
+        _fail(f"--to: the table's targets are {', '.join(table.TARGETS)}, got {', '.join(bad)}")
+    fits_ = [f.strip() for f in fits.split(",") if f.strip()] if fits else None
+
+    def on_row(r):
+        if "error" in r:
+            console.print(f"[red]failed[/red] {escape(table.key(r))}: {escape(r['error'])}", soft_wrap=True)
+        else:
+            console.print(f"{escape(table.key(r))} {r['target']} "
+                          + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" {r['seconds']:.1f} s",
+                          soft_wrap=True)
+
+    try:
+        rows = table.run_table(out, targets, per_set=per_set, fits=fits_, limit=limit, workers=workers,
+                               on_row=on_row)
+    except KeyboardInterrupt:
+        console.print(f"[yellow]interrupted[/yellow]: the finished rows are in {escape(out)}; "
+                      "run the same command again to resume", soft_wrap=True)
+        sys.exit(130)
+    except ValueError as e:
+        _fail(str(e).replace("fits: ", "--fits: ").replace("workers ", "--workers "))
+    all_jobs = table.jobs(targets, per_set, fits_)
+    console.print(f"{escape(out)}: {sum(table.key(j) in rows for j in all_jobs)} of {len(all_jobs)} conversions",
+                  soft_wrap=True)
+    if md:
+        Path(md).write_text(table.markdown(rows))
+        console.print(f"wrote {escape(md)} ({len(rows)} rows)")
+
+
 @main.command("fit-batch")
 @click.argument("targets", nargs=-1, required=True)
 @click.option("--models", required=True, metavar="A,B,...", help="Models to fit (comma-separated registry names).")

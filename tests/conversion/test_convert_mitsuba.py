@@ -88,7 +88,7 @@ def test_the_rule_of_thumb_and_a_perturbed_result_fail_the_same_check(tmp_path):
     thumb = {"type": "principled", "base_color": {"type": "rgb", "value": [0.5, 0.4, 0.3]}, "metallic": 0.0,
              "roughness": float(np.sqrt(2.0 / 22.0))}
     ok, diff = albedo_check(src, thumb)
-    assert not ok and np.abs(diff).max() > 2 * TOLERANCE
+    assert not ok and np.abs(diff).max() > 1.5 * TOLERANCE       # 0.097 at 75 degrees, measured
     good = convert(str(tmp_path / "lib.mtl")).items[0].params
     assert albedo_check(src, good)[0] and not albedo_check(src, _scaled(good, 0.85))[0]
 
@@ -101,10 +101,43 @@ def _scaled(d, s):
 
 
 def test_a_source_that_is_not_energy_conserving_is_warned_about(tmp_path):
-    (tmp_path / "hot.mtl").write_text("newmtl hot\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNs 4\nillum 2\n")
+    # a sharp highlight reflects about Ks at normal incidence: Kd + Ks
+    (tmp_path / "hot.mtl").write_text("newmtl hot\nKd 0.8 0.8 0.8\nKs 0.9 0.9 0.9\nNs 1000\nillum 2\n")
     c = convert(str(tmp_path / "hot.mtl"), to="mitsuba:diffuse").items[0]
     assert any("not energy conserving" in w for w in c.warnings)
-    assert c.albedo["0"]["source"][0] == pytest.approx(1.3, abs=1e-6)
+    assert c.albedo["0"]["source"][0] == pytest.approx(1.7, abs=2e-3)
+
+
+def test_the_probes_albedo_resolves_a_sharp_lobe_at_grazing_incidence():
+    # Mitsuba's own sampler is the truth; the spherical-angle grid the fit used before
+    # (hemisphere_grid, m = 4, 6 levels) put this lobe between its nodes at 75 degrees
+    from plausible.analysis import direction
+    from plausible.integrals.quadrature import hemisphere_grid
+
+    d = {"type": "principled", "roughness": 0.09, "metallic": 0.0,
+         "base_color": {"type": "rgb", "value": [0.3, 0.3, 0.3]}}
+    b = CM._load(d)
+    probe = CM.Probe([CM._mirror], thetas_deg=(0.0, 45.0, 75.0, 80.0))
+    truth = CM.sampler_albedo(d, thetas_deg=(0.0, 45.0, 75.0, 80.0))[:, 0]
+    assert np.allclose(probe.measure(b)[1][:, 0], truth, atol=2e-3)
+    wi = direction(np.radians(75.0))
+    g = hemisphere_grid(wi, CM._mirror(wi), m=4, levels=6)
+    wo = g.wo.reshape(-1, 3)
+    old = (g.weight.reshape(-1) * wo[:, 2]) @ np.asarray(b.eval(np.broadcast_to(wi, wo.shape), wo))[:, 0]
+    assert abs(old - truth[2]) > 0.05
+
+
+def test_a_sharp_mtl_highlight_converts_within_the_band(tmp_path):
+    # Ks only, Ns 60: the highlight as read (Blinn's microfacet lobe) keeps about Ks at every
+    # incidence, and Mitsuba's roughconductor follows it; the reciprocal Blinn lobe read before
+    # falls as cos^2 and fails the same check, as does the result with its colour scaled by 0.9
+    (tmp_path / "m.mtl").write_text("newmtl metal\nKs 0.9 0.7 0.4\nNs 60\nillum 2\n")
+    c = convert(str(tmp_path / "m.mtl")).items[0]
+    assert c.target == "mitsuba:roughconductor" and not c.warnings
+    src = read_sources(str(tmp_path / "m.mtl"))[0].model
+    assert albedo_check(src, c.params)[0]
+    assert not albedo_check(plausible.make("reciprocal-blinn:ks=0.9,0.7,0.4:n=60"), c.params)[0]
+    assert not albedo_check(src, _scaled(c.params, 0.9))[0]
 
 
 def test_the_xml_fragment_loads_each_bsdf_by_its_id(tmp_path):
@@ -139,11 +172,33 @@ def test_a_registered_model_target_is_fitted_and_reported():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("spec", ["material:alum-bronze@ngan2005/ward", "material:alumina-oxide@ngan2005/ward",
-                                  "material:black-oxidized-steel@ngan2005/cook-torrance"])
+                                  "material:black-oxidized-steel@ngan2005/cook-torrance",
+                                  "material:alumina-oxide@low2012/microfacet-e2"])
 def test_published_fits_converted_keep_their_albedo(spec):
+    # alumina-oxide@low2012/microfacet-e2 was 0.108 off at 75 degrees (as principled) while the fit's
+    # albedo rule missed principled's sharp lobe at grazing incidence
     c = convert(spec).items[0]
     assert isinstance(mi.load_dict(c.params), mi.BSDF)
     assert albedo_check(plausible.make(spec), c.params)[0]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("spec", ["material:aluminium@ngan2005/ashikhmin-shirley",
+                                  "material:alumina-oxide@low2012/cook-torrance-e2"])
+def test_published_fits_converted_to_gltf_keep_their_albedo(spec):
+    # 0.211 and 0.130 off at 75 degrees with the spherical-angle albedo rule; the glTF BRDF's own sampler
+    c = convert(spec, to="gltf").items[0]
+    assert albedo_check(plausible.make(spec), {"type": "gltf-pbr", **c.params})[0]
+
+
+@pytest.mark.slow
+def test_mtl_materials_with_sharp_highlights_convert_within_the_band(tmp_path):
+    (tmp_path / "lib.mtl").write_text("newmtl glossy-red\nKd 0.35 0.05 0.05\nKs 0.6 0.6 0.6\nNs 100\nillum 2\n"
+                                      "newmtl sharp\nKd 0.2 0.2 0.2\nKs 0.7 0.7 0.7\nNs 800\nillum 3\n"
+                                      "newmtl broad\nKd 0.3 0.3 0.3\nKs 0.6 0.5 0.4\nNs 5\nillum 2\n")
+    sources = read_sources(str(tmp_path / "lib.mtl"))
+    for c, s in zip(convert(str(tmp_path / "lib.mtl")).items, sources):
+        assert albedo_check(s.model, c.params)[0], c.name
 
 
 def test_the_command_writes_the_file_and_reports_every_field(tmp_path):
@@ -211,3 +266,14 @@ def test_the_command_names_the_bad_statement_of_an_mtl_file(tmp_path):
     (tmp_path / "bad.mtl").write_text("newmtl m\nNs -3\n")
     r = CliRunner().invoke(main, ["convert", str(tmp_path / "bad.mtl"), "--to", "mitsuba", "--out", "x.json"])
     assert r.exit_code == 2 and "bad.mtl:2 (material 'm'): Ns must be one number in [0, 1e+06]" in r.output
+
+
+def test_a_source_the_family_cannot_follow_is_warned_about_with_the_numbers():
+    # the reciprocal Blinn lobe falls as cos^2 (0.60 at 0 degrees, 0.08 at 75 for Ns = 30): no single
+    # roughconductor follows it, and the warning gives the difference and both albedos
+    c = convert("reciprocal-blinn:ks=0.6:n=30", to="mitsuba:roughconductor").items[0]
+    (w,) = c.warnings
+    v = c.albedo["75"]
+    assert v["source"][0] == pytest.approx(0.08, abs=0.01) and v["max_abs_difference"] > TOLERANCE
+    assert (f"75 degrees ({v['max_abs_difference']:.3f}: source {v['source'][0]:.3f}, "
+            f"target {v['target'][0]:.3f} in channel 0)") in w

@@ -1,5 +1,6 @@
 """The Wavefront MTL reader (issue 32): statements, defaults, the plausible reading
-(albedo at normal incidence Kd + Ks: the normalisation's closed form) and the
+(Lambertian plus Blinn 1977's microfacet highlight: its albedo against a 1-D
+integral, the specification's highlight times 1 / (N.V), conservation) and the
 errors of bad input, each naming the statement."""
 
 import numpy as np
@@ -45,12 +46,58 @@ def test_textures_are_carried_by_reference_and_ka_is_noted(tmp_path):
     assert any(n.startswith("Ka:") for n in shiny.notes)
 
 
-def test_illum_2_has_albedo_kd_plus_ks_at_normal_incidence(tmp_path):
-    # reciprocal-blinn is normalised to albedo ks at normal incidence (closed form)
+def _normal_incidence_highlight(ns):
+    """Albedo at normal incidence of the highlight as read, per unit Ks, by a 1-D integral:
+    ``wi = n``, ``h`` at polar angle ``d``, ``wo`` at ``2d``; V-groove ``G = min(1, 2 cos 2d)``;
+    ``int D G (wi.h) / cos(theta_i) d omega_h``, ``D = (ns + 2) / (2 pi) cos^ns d``."""
+    from scipy import integrate
+
+    g = lambda d: (ns + 2) / (2 * np.pi) * np.cos(d) ** ns * min(1.0, 2 * np.cos(2 * d)) * np.cos(d)  # noqa: E731
+    return integrate.quad(lambda d: g(d) * 2 * np.pi * np.sin(d), 0, np.pi / 4, points=[np.pi / 6], limit=200)[0]
+
+
+def test_illum_2_is_lambertian_plus_blinns_microfacet_highlight(tmp_path):
     model, spec, _ = as_model(read_mtl(write(tmp_path, LIBRARY))[0])
+    assert spec == ("lambertian:rd=0.5,0.25,0.1 + cook-torrance:distribution=blinn:m=0.19611613513818404:"
+                    "rs=0.3,0.3,0.3:fresnel=none:geometry=vgroove")
+    # the albedo at normal incidence: Kd plus Ks times the 1-D integral of D G
     a = plausible.albedo(model, [0, 0, 1]).value
-    assert np.allclose(a, [0.8, 0.55, 0.4], atol=1e-6)
-    assert spec == "lambertian:rd=0.5,0.25,0.1 + reciprocal-blinn:ks=0.3,0.3,0.3:n=50.0"
+    assert np.allclose(a, np.array([0.5, 0.25, 0.1]) + 0.3 * _normal_incidence_highlight(50.0), atol=1e-6)
+
+
+def test_the_highlight_is_the_specifications_times_one_over_n_dot_v(tmp_path):
+    # MTL: colour = Ks (N.H)^Ns I per light (no N.L), i.e. f (N.L) = Ks (N.H)^Ns k at a normal view,
+    # and reciprocity puts the same 1 / (N.V) at every view: f (N.L)(N.V) / (N.H)^Ns is one constant
+    # (where the V-groove G is 1: near the peak)
+    ns = 40.0
+    model, _, _ = as_model(read_mtl(write(tmp_path, f"newmtl m\nKs 0.5 0.5 0.5\nNs {ns}\nillum 2\n"))[0])
+    rng = np.random.default_rng(3)
+    wi = plausible.direction(rng.uniform(0, 0.5, 40), rng.uniform(0, 2 * np.pi, 40))
+    wo = plausible.direction(rng.uniform(0, 0.5, 40), rng.uniform(0, 2 * np.pi, 40))
+    h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
+    f = np.asarray(model.eval(wi, wo))[:, 0]
+    k = f * wi[:, 2] * wo[:, 2] / h[:, 2] ** ns
+    assert np.allclose(k, 0.5 * (ns + 2) / (8 * np.pi), rtol=1e-12)
+    assert np.allclose(model.eval(wi, wo), model.eval(wo, wi), rtol=1e-14)
+
+
+@pytest.mark.parametrize("ns", [0.0, 5.0, 30.0, 300.0])
+def test_the_highlight_as_read_conserves_energy_and_stays_nearly_flat(tmp_path, ns):
+    from plausible.analysis import albedo_curve
+
+    ks = 0.6
+    model, _, _ = as_model(read_mtl(write(tmp_path, f"newmtl m\nKs {ks}\nNs {ns}\nillum 2\n"))[0])
+    thetas = [0, 30, 45, 60, 75, 85, 89]
+    a = np.asarray(albedo_curve(model, thetas_deg=thetas).value)[..., 0].ravel()
+    assert a.max() <= ks + 1e-9
+    assert a[0] == pytest.approx(ks * _normal_incidence_highlight(ns), abs=1e-6)
+    if ns >= 30:
+        # nearly flat: within 0.05 of Ks from 0 to 75 degrees; the reciprocal Blinn lobe (the
+        # reading without the cosines) is not (it falls as cos^2: 0.08 at 75 degrees for Ns = 30)
+        assert np.all(np.abs(a[:5] - ks) < 0.05)
+        old = plausible.make(f"reciprocal-blinn:ks={ks}:n={ns}")
+        b = np.asarray(albedo_curve(old, thetas_deg=thetas).value).ravel()
+        assert not np.all(np.abs(b[:5] - ks) < 0.05) and b[4] < 0.1
 
 
 def test_illum_1_is_lambertian_and_notes_the_unused_ks(tmp_path):
@@ -67,9 +114,9 @@ def test_the_spec_of_a_reading_builds_the_same_model_again(tmp_path):
     assert np.allclose(again.eval(wi, wo), src.model.eval(wi, wo), rtol=1e-14)
 
 
-def test_kd_plus_ks_above_one_is_noted_as_not_conserving(tmp_path):
+def test_kd_plus_ks_above_one_is_noted(tmp_path):
     m = read_mtl(write(tmp_path, "newmtl hot\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nNs 10\nillum 2\n"))[0]
-    assert any("not energy conserving" in n for n in as_model(m)[2])
+    assert any("exceeds 1: energy conservation is not guaranteed" in n for n in as_model(m)[2])
 
 
 @pytest.mark.parametrize("line, words", [

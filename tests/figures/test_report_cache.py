@@ -5,7 +5,9 @@ writes index.html, and the CLI reports unknown names, repeats and red checks."""
 from __future__ import annotations
 
 import json
+import os
 import re
+import time
 
 import numpy as np
 import pytest
@@ -90,17 +92,16 @@ def test_figures_cli_unwritable_folder(tmp_path):
 
 def _crash(ctx):
     """A figure whose process dies mid-way, as a crash inside a renderer would."""
-    import os
-
     ctx.steps(2)
     ctx.tick()
     os._exit(3)
 
 
 def _sleep(ctx):
-    import time
+    from pathlib import Path
 
     ctx.steps(1)
+    Path(os.environ["PLAUSIBLE_TEST_SLEEPING"]).touch()    # tells the test the worker is inside
     time.sleep(120)
 
 
@@ -155,14 +156,26 @@ def test_an_interrupted_parallel_run_ends_its_workers_and_leaves_no_partial_fold
     import threading
 
     monkeypatch.setitem(F.FIGURES, "sleep", F.Figure("sleep", "Sleep", "test", "caption", _sleep, {}))
+    mark = tmp_path.parent / f"{tmp_path.name}.sleeping"
+    monkeypatch.setenv("PLAUSIBLE_TEST_SLEEPING", str(mark))
     run(tmp_path, only=[fake], spp=16)
-    timer = threading.Timer(6.0, _thread.interrupt_main)    # Ctrl-C while "sleep" runs
-    timer.start()
+    done = threading.Event()
+
+    def ctrl_c_while_sleeping():                            # Ctrl-C once "sleep" runs, however slow the spawn
+        while not done.is_set():
+            if mark.exists():
+                _thread.interrupt_main()
+                return
+            time.sleep(0.05)
+
+    watcher = threading.Thread(target=ctrl_c_while_sleeping, daemon=True)
+    watcher.start()
     try:
         with pytest.raises(KeyboardInterrupt):
             run(tmp_path, only=["sleep", fake], spp=32, jobs=2, force=True)
     finally:
-        timer.cancel()
+        done.set()
+        watcher.join()
     assert multiprocessing.active_children() == []
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
     assert not (tmp_path / "sleep").exists() and (tmp_path / "index.html").exists()

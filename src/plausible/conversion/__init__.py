@@ -41,15 +41,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .mitsuba import REPORT_THETAS
+from .mitsuba import PROBE_THETAS, REPORT_THETAS
 
 __all__ = ["Conversion", "Converted", "Source", "TOLERANCE", "albedo_check", "convert", "mitsuba_xml", "read_sources"]
 
 #: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
 #: conversion of a conserving source is expected to keep; beyond it a warning.
 TOLERANCE = 0.05
-#: Incidences (degrees) at which a source's albedo is probed for energy conservation.
-CONSERVE_THETAS = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 75.0, 80.0, 85.0)
+#: Incidences (degrees) at which a source's albedo is probed for energy conservation: the
+#: fit's (:data:`.mitsuba.PROBE_THETAS`, 0-80) and 85 (the fit reuses these albedos).
+CONSERVE_THETAS = tuple(sorted(set(PROBE_THETAS) | {85.0}))
 
 
 @dataclass
@@ -299,17 +300,18 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     from . import mitsuba as CM
 
     notes = list(src.notes)
+    probe = CM.probe_for(src.model)
+    # the source's albedo at the probe's incidences: computed once, with the report's (CONSERVE_THETAS)
+    target = CM.source_target(src.model, probe, src_alb[[CONSERVE_THETAS.index(t) for t in CM.PROBE_THETAS]])
     if family is None:
         families, why = CM.candidates(src.model, src_alb[0])
-        probe = CM.probe_for(src.model)
-        target = CM.source_target(src.model, probe)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
         family = r.family
         tried = ", ".join(f"{x.family} {x.figure:.3g}" for x in fits)
         notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
     else:
-        r = CM.fit_family(src.model, family, metric)
+        r = CM.fit_family(src.model, family, metric, probe=probe, target=target)
     textures = dict(src.textures)
     d = _with_textures(r.dict, family, textures, notes)
     tgt_alb = CM.sampler_albedo(r.dict)
@@ -349,11 +351,19 @@ def _with_textures(d, family, textures, notes):
 
 
 def _albedo_warnings(alb):
-    bad = [(t, v["max_abs_difference"]) for t, v in alb.items() if v["max_abs_difference"] > TOLERANCE]
+    """A warning naming every incidence where the target is beyond :data:`TOLERANCE`, with
+    the difference and both albedos in the channel of the largest difference."""
+    bad = [(t, v) for t, v in alb.items() if v["max_abs_difference"] > TOLERANCE]
     if not bad:
         return []
+
+    def one(t, v):
+        c = int(np.argmax(np.abs(v["difference"])))
+        return (f"{t} degrees ({v['max_abs_difference']:.3f}: source {v['source'][c]:.3f}, target "
+                f"{v['target'][c]:.3f} in channel {c})")
+
     return ["the target's albedo differs from the source's by more than "
-            f"{TOLERANCE} at " + ", ".join(f"{t} degrees ({d:.3f})" for t, d in bad)
+            f"{TOLERANCE} at " + ", ".join(one(t, v) for t, v in bad)
             + ": the target family cannot follow the source's albedo curve"]
 
 

@@ -10,12 +10,28 @@ gives the reasons):
 * ``illum 0`` (colour, no lighting) and ``illum 1`` (diffuse): Lambertian,
   ``f = Kd / pi`` (``lambertian:rd=Kd``); a ``Ks`` there is unused by the
   model and noted.
-* ``illum 2`` (diffuse and highlight): ``f = Kd / pi + Ks c(Ns) (n.h)^Ns``,
-  the reciprocal Blinn lobe normalised so that its albedo at normal incidence
-  is exactly ``Ks`` (``c(n) = (n+2)(n+4) / (8 pi (n + 2^(-n/2)))``,
-  :func:`plausible.models.phong.blinn_norm`): the sum
-  ``lambertian:rd=Kd + reciprocal-blinn:ks=Ks:n=Ns``.  With this reading
-  ``Kd + Ks <= 1`` (per channel) is energy conservation at normal incidence.
+* ``illum 2`` (diffuse and highlight): the specification's colour is
+  ``Kd sum_j (N.L_j) I_j + Ks sum_j (N.H_j)^Ns I_j`` -- the highlight has no
+  ``N.L``, so as a BRDF (radiance ``f I cos(theta_l)`` per light) it is
+  ``Ks (N.H)^Ns / (N.L)``.  The only reciprocal BRDF that agrees with it up to a
+  function of the view, ``Ks (N.H)^Ns g(N.V) / (N.L)``, has ``g = k / (N.V)``
+  (``g(v) / l = g(l) / v``): ``k Ks (N.H)^Ns / ((N.L)(N.V))``, the microfacet
+  form -- Blinn 1977's own, ``D G F / (N.E)`` per unit light, whose ``D1`` is
+  ``(N.H)^c`` and which the specification cites (BLIN77).  So the highlight is
+  read as ``Ks D(h) G / (4 (N.L)(N.V))`` with ``D`` the normalised Blinn
+  distribution ``(Ns + 2) / (2 pi) (N.H)^Ns`` and Blinn's (Torrance-Sparrow's)
+  V-groove ``G``, ``F = 1`` (``Ks`` the facets' reflectance): the model
+  ``cook-torrance:distribution=blinn:m=sqrt(2/(Ns+2)):rs=Ks:fresnel=none``
+  (:func:`plausible.models.cook_torrance.blinn_d`).  Its albedo is at most ``Ks``
+  at every incidence (measured for ``Ns`` from 0 to 10^5), so ``Kd + Ks <= 1`` per
+  channel conserves energy everywhere; it is nearly flat in incidence, about
+  ``Ks`` for ``Ns >= 20`` and less for broad highlights (``0.80 Ks`` at normal
+  incidence for ``Ns = 5``, ``0.375 Ks`` for ``Ns = 0``: masking, and facets that
+  reflect below the horizon).  The reciprocal Blinn lobe ``Ks c(Ns) (N.H)^Ns``
+  (no division by the cosines) that an earlier version read falls with
+  incidence as ``cos^2(theta)`` for sharp highlights (0.60, 0.32, 0.08 at 0, 45,
+  75 degrees for ``Ks = 0.6``, ``Ns = 30``): it drops both ``1/cos`` that the
+  specification's missing ``N.L`` and reciprocity put there.
 * ``illum 3`` (``illum 2`` plus ray-traced reflection weighted by ``Ks``):
   the same sum: the mirror reflection of ``illum 3`` and its highlight are one
   lobe in a physical reading (the highlight is the blurred reflection of the
@@ -41,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ILLUM", "MtlMaterial", "read_mtl", "as_model", "NS_MAX"]
+__all__ = ["ILLUM", "MtlMaterial", "read_mtl", "as_model", "highlight_spec", "NS_MAX"]
 
 #: The illumination models read, and what each means in the specification.
 ILLUM = {0: "colour on, ambient off", 1: "colour on, ambient on (diffuse)",
@@ -178,11 +194,19 @@ def _spec_colour(c) -> str:
     return ",".join(repr(float(x)) for x in c)
 
 
+def highlight_spec(Ks, Ns) -> str:
+    """The spec of MTL's highlight ``Ks``, ``Ns`` as read (module docstring): the
+    microfacet model of the normalised Blinn distribution of exponent ``Ns``
+    (slope ``m = sqrt(2 / (Ns + 2))``), V-groove masking, no Fresnel."""
+    m = math.sqrt(2.0 / (float(Ns) + 2.0))
+    return f"cook-torrance:distribution=blinn:m={m!r}:rs={_spec_colour(Ks)}:fresnel=none:geometry=vgroove"
+
+
 def as_model(m: MtlMaterial):
     """``(model, spec, notes)``: the plausible reading of ``m`` (module docstring):
     a :class:`~plausible.models.sum.Sum` labelled with the material's name, its
-    spec text (``"lambertian:rd=... + reciprocal-blinn:ks=...:n=..."``), and the
-    notes of the reading."""
+    spec text (``"lambertian:rd=... + cook-torrance:distribution=blinn:m=...:rs=...:..."``),
+    and the notes of the reading."""
     from .. import registry
     from ..models.sum import Sum
 
@@ -198,13 +222,14 @@ def as_model(m: MtlMaterial):
         if np.any(m.Kd > 0) or not np.any(m.Ks > 0):
             parts.append(f"lambertian:rd={_spec_colour(m.Kd)}")
         if np.any(m.Ks > 0):
-            parts.append(f"reciprocal-blinn:ks={_spec_colour(m.Ks)}:n={float(m.Ns)!r}")
+            parts.append(highlight_spec(m.Ks, m.Ns))
         if m.illum == 3:
             notes.append("illum 3: the ray-traced reflection is the Blinn-Phong lobe itself (not added twice); "
                          "no Fresnel (MTL gives Fresnel to illum 5 and 7)")
     total = m.Kd + (m.Ks if m.illum >= 2 else 0.0)
     if np.any(total > 1.0 + 1e-12):
-        notes.append(f"Kd + Ks = {_spec_colour(np.round(total, 4))} exceeds 1: the material as read is "
-                     "not energy conserving")
+        notes.append(f"Kd + Ks = {_spec_colour(np.round(total, 4))} exceeds 1: energy conservation is not "
+                     "guaranteed (it holds only where the highlight reflects less than Ks; the conversion "
+                     "measures the albedo)")
     models = [registry.make_from_spec(s) for s in parts]
     return Sum(models, name=m.name), " + ".join(parts), notes

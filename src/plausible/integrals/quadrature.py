@@ -162,6 +162,32 @@ def half_vector_lune(wi, phi):
     return 0.5 * np.arccos(np.clip(-q / np.maximum(1.0 - q, 1e-300), -1.0, 1.0))
 
 
+
+def half_vector_rule(wi, peaks=(), m: int = 3, levels: int = 4, pole_levels: int = 10):
+    """A fixed rule for ``int g(wo) d omega_o`` over the upper hemisphere in the
+    half-vector frame of :func:`half_vector_breaks` (no tangent axes, no lune):
+    ``(wo (N, 3), weight (N,))``, the weight the solid angle of the node
+    (``ws wp tmax sin(t) 4 (wi.h)``, the change of variables of
+    :func:`plausible.integrals.albedo._grid_sum`).  The mirror direction is the
+    edge ``s = 0`` of the domain, so any isotropic lobe about it is resolved
+    whatever its width down to ``2^-pole_levels`` of the polar range: at ``m = 3``,
+    ``levels = 4``, ``pole_levels = 10`` (about 4,500 nodes an incidence) the albedo of
+    Mitsuba's GGX ``roughconductor`` (alpha 0.003-1) and ``principled`` is within
+    4e-5 of the adaptive integrator's at 0-80 degrees (``tests/conversion``)."""
+    wi = np.asarray(wi, dtype=np.float64)
+    sb, pb = half_vector_breaks(wi, peaks, levels, 1, pole_levels=pole_levels, axes=False)
+    s, ws = panel_rule(sb, m)
+    p, wp = panel_rule(pb, m)
+    tmax = half_vector_tmax(wi, p)
+    t = s[:, None] * tmax[None, :]
+    st, ct = np.sin(t), np.cos(t)
+    h = np.stack(np.broadcast_arrays(st * np.cos(p)[None, :], st * np.sin(p)[None, :], ct), axis=-1)
+    d = h @ wi
+    wo = 2.0 * d[..., None] * h - wi
+    w = ws[:, None] * (wp * tmax)[None, :] * st * (4.0 * d)
+    return wo.reshape(-1, 3), w.reshape(-1)
+
+
 def _grade(c, lo, hi, levels):
     """``c`` and ``c +- (hi - lo) 2^-k``, ``k = 1..levels``."""
     d = (hi - lo) * 0.5 ** np.arange(1, levels + 1)

@@ -31,6 +31,10 @@ from ..registry import register
 from ..vec import above
 
 GEOMETRY = ("vgroove", "none")
+#: Microfacet distributions: Beckmann's, and the normalised Blinn (Phong) distribution
+#: ``(n.h)^n`` of :func:`blinn_d` (Blinn 1977's ``D1``; the reading of Wavefront MTL's
+#: highlight, ``docs/convert.md``).
+DISTRIBUTIONS = ("beckmann", "blinn")
 
 
 def beckmann_d(ops, h, m):
@@ -46,6 +50,27 @@ def beckmann_d(ops, h, m):
     z = ops.where(ok, h[2], 1.0)
     tan2 = (h[0] * h[0] + h[1] * h[1]) / (z * z)
     return ops.where(ok, ops.exp(-tan2 / (m * m) - 4.0 * ops.log(z)) / (PI * m * m), 0.0)
+
+
+def blinn_exponent(m):
+    """``n = 2 / m^2 - 2``: the exponent of the Blinn distribution of RMS slope ``m``
+    (Walter et al. 2007, section 5.2: the Phong distribution ``alpha_p = 2 alpha_b^-2 - 2``
+    matches Beckmann's of slope ``alpha_b`` near the peak)."""
+    return 2.0 / (m * m) - 2.0
+
+
+def blinn_d(ops, h, m):
+    """``(n + 2) / (2 pi) (n.h)^n = (n.h)^n / (pi m^2)``, ``n = 2 / m^2 - 2``
+    (:func:`blinn_exponent`); zero for ``hz <= 0``.
+
+    Blinn 1977's ``D1 = (N.H)^c``, normalised so that ``int D cos(delta) d omega_h = 1``
+    (``int_0^1 x^(n+1) dx 2 pi = 2 pi / (n + 2)``; Walter et al. 2007, eq. 30).  The power
+    is taken from ``sin^2(delta)`` (:func:`plausible.warps.pow_cos_from_sin2`), accurate near
+    the peak for large ``n``."""
+    n = blinn_exponent(m)
+    ok = h[2] > 0
+    lobe = warps.pow_cos_from_sin2(ops, h[0] * h[0] + h[1] * h[1], n, h[2])
+    return ops.where(ok, lobe / (PI * m * m), 0.0)
 
 
 def vgroove_g(ops, wi, wo, h, vh):
@@ -69,8 +94,11 @@ class CookTorrance(BxDF):
 
     ``fresnel``: ``"schlick"`` (``R0 = rs``), ``"none"`` (``F = rs``; the papers'
     ``F = 1`` is ``rs = 1``) or ``"conductor"`` (``eta + i k``).  ``geometry``:
-    ``"vgroove"`` or ``"none"`` (``G = 1``).  Sampling: Beckmann half vector
-    (``p_h = D cos(delta)``), reflected, ``pdf = p_h / (4 wi.h)`` (Walter et al. 2007, eqs. 28, 14).
+    ``"vgroove"`` or ``"none"`` (``G = 1``).  ``distribution``: ``"beckmann"`` (default)
+    or ``"blinn"`` (:func:`blinn_d`, exponent ``n = 2 / m^2 - 2``).  Sampling: the half
+    vector of density ``p_h = D cos(delta)`` (Beckmann's; for Blinn's a ``(n.h)^(n+1)`` lobe,
+    :func:`plausible.warps.reflected_half_vector`), reflected, ``pdf = p_h / (4 wi.h)``
+    (Walter et al. 2007, eqs. 28, 14).
     """
 
     PARAMS = (
@@ -80,6 +108,7 @@ class CookTorrance(BxDF):
         Param("geometry", "vgroove", kind="choice", choices=GEOMETRY),
         Param("eta", 0.2, 0.0, 100.0, "color", "conductor index n (fresnel='conductor')"),
         Param("k", 3.0, 0.0, 100.0, "color", "conductor extinction k (fresnel='conductor')"),
+        Param("distribution", "beckmann", kind="choice", choices=DISTRIBUTIONS),
     )
 
     def _f(self, ops, wi, wo, p):
@@ -89,11 +118,18 @@ class CookTorrance(BxDF):
         co = ops.where(ok, wo[2], 1.0)
         g = vgroove_g(ops, wi, wo, h, kh) if p.geometry == "vgroove" else 1.0
         F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
-        return ops.where(ok, F * beckmann_d(ops, h, p.m) * g / (4.0 * ci * co), 0.0)
+        d = blinn_d(ops, h, p.m) if p.distribution == "blinn" else beckmann_d(ops, h, p.m)
+        return ops.where(ok, F * d * g / (4.0 * ci * co), 0.0)
 
     def _pdf(self, ops, wi, wo, q):
+        if q.distribution == "blinn":
+            e = blinn_exponent(q.m) + 1.0
+            return warps.reflected_half_vector_pdf(ops, wi, wo, e, e)
         return warps.beckmann_reflected_pdf(ops, wi, wo, q.m, q.m)
 
     def _sample(self, ops, wi, u, q):
+        if q.distribution == "blinn":
+            e = blinn_exponent(q.m) + 1.0
+            return warps.reflected_half_vector(ops, wi, e, e, u[1], u[2])
         h = warps.beckmann_half_vector(ops, q.m, q.m, u[1], u[2])
         return vec.reflect(wi, h)

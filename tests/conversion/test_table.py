@@ -1,0 +1,91 @@
+"""The error table's run (issue 32): resumable (rows appended as they finish, a cut last
+line ignored, done rows skipped), round robin over the fit sets, and its summary's counts."""
+
+import json
+
+import pytest
+
+from plausible.conversion import table
+
+
+def _fake_row(job):
+    to, fit, name = job
+    return dict(to=to, fit=fit, material=name, target=f"{to}:x", perceptual=1.0, l2=0.5, log=0.2,
+                albedo_diff=[0.01, 0.02, 0.07 if name.startswith("a") else 0.03], source_albedo_max=0.5,
+                conserving=True, params={}, seconds=1.0)
+
+
+def test_jobs_go_round_robin_over_the_fit_sets_and_every_target():
+    j = table.jobs(("mitsuba", "gltf"), per_set=2, fits=["ngan2005/ward", "low2012/smooth-e2"])
+    assert len(j) == 2 * 2 * 2
+    assert [(f, t) for t, f, _ in j[:4]] == [("ngan2005/ward", "mitsuba"), ("ngan2005/ward", "gltf"),
+                                             ("low2012/smooth-e2", "mitsuba"), ("low2012/smooth-e2", "gltf")]
+    assert j[0][2] < j[4][2]          # the first material of each set, then the second
+    with pytest.raises(ValueError, match="no loadable fit set nope"):
+        table.jobs(fits=["nope"])
+
+
+def test_an_interrupted_run_resumes_without_repeating_a_row(tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(table, "convert_row", lambda job: calls.append(job) or _fake_row(job))
+    path = tmp_path / "t.jsonl"
+    kw = dict(per_set=2, fits=["ngan2005/ward", "low2012/smooth-e2"])
+    table.run_table(path, ("mitsuba",), limit=3, **kw)
+    assert len(calls) == 3 and len(path.read_text().splitlines()) == 3
+    with open(path, "a") as f:        # an interrupt in the middle of a line
+        f.write('{"to": "mitsuba", "fit": ')
+    rows = table.run_table(path, ("mitsuba",), **kw)
+    assert len(calls) == 4 and len(set(calls)) == 4 and len(rows) == 4
+    assert table.run_table(path, ("mitsuba",), **kw) == rows and len(calls) == 4
+
+
+def test_a_failing_conversion_is_recorded_and_the_run_goes_on(tmp_path, monkeypatch):
+    def convert_row(job):
+        if "oxide" in job[2]:
+            raise ValueError("boom")
+        return _fake_row(job)
+
+    monkeypatch.setattr(table, "convert_row", convert_row)
+    rows = table.run_table(tmp_path / "t.jsonl", ("gltf",), per_set=2, fits=["ngan2005/ward"])
+    assert sorted("error" in r for r in rows.values()) == [False, True]
+    assert "ValueError: boom" in table.markdown(rows)
+
+
+def test_the_summary_counts_the_rows_within_the_band(tmp_path):
+    rows = {table.key(r): r for r in (_fake_row(("mitsuba", "s", n)) for n in ("alpha", "beta", "gamma"))}
+    rows[table.key(_fake_row(("mitsuba", "s", "delta")))] = {**_fake_row(("mitsuba", "s", "delta")),
+                                                             "conserving": False, "albedo_diff": [0.2, 0, 0]}
+    (s,) = table.summary(list(rows.values()), 0.05)
+    assert (s["n"], s["within"], s["conserving"], s["worst"]) == (4, 2, 3, 0.2)
+    md = table.markdown(rows)
+    assert "| s | 4 | 2 / 3 |" in md and "no (source not conserving)" in md
+    assert json.loads(json.dumps(rows)) == rows
+
+
+def test_the_command_writes_the_markdown_of_the_rows_and_refuses_a_bad_target(tmp_path):
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    path, md = tmp_path / "t.jsonl", tmp_path / "t.md"
+    path.write_text("\n".join(json.dumps(_fake_row(("mitsuba", "ngan2005/ward", n))) for n in ("alum-bronze", "beige"))
+                    + "\n")
+    r = CliRunner().invoke(main, ["convert-table", "--out", str(path), "--to", "mitsuba", "--fits", "ngan2005/ward",
+                                  "--limit", "0", "--markdown", str(md)])
+    assert r.exit_code == 0, r.output
+    assert "1 of 86 conversions" in r.output        # beige is no material of the set
+    assert "| ngan2005/ward | 2 | 1 / 2 |" in md.read_text()
+    r = CliRunner().invoke(main, ["convert-table", "--out", str(path), "--to", "blender"])
+    assert r.exit_code == 2 and "--to: the table's targets are mitsuba, gltf" in r.output
+
+
+def test_worker_processes_write_every_row_once(tmp_path, monkeypatch):
+    import multiprocessing
+
+    if multiprocessing.get_start_method() != "fork":
+        pytest.skip("the fake conversion reaches the workers by fork only")
+    monkeypatch.setattr(table, "convert_row", _fake_row)
+    path = tmp_path / "t.jsonl"
+    rows = table.run_table(path, ("mitsuba", "gltf"), per_set=2, fits=["ngan2005/ward"], workers=2)
+    assert len(rows) == 4 and len(path.read_text().splitlines()) == 4
+    assert set(rows) == {table.key(j) for j in table.jobs(("mitsuba", "gltf"), 2, ["ngan2005/ward"])}
