@@ -141,6 +141,73 @@ def test_mitsuba_optimisation_step_compiles_nothing(benchmark, mi, label, bsdf, 
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
 
 
+def roughconductor_from_numpy(mi, op, wi, wo, u):
+    """A call of Mitsuba's ``roughconductor`` (Beckmann, alpha 0.1, as in
+    bench_throughput.py) on NumPy arrays, as a Mitsuba user makes it: the
+    ``(n, 3)`` arrays converted to ``Vector3f`` (float32; NumPy's transposed
+    copy is the faster of the two conversions measured, Dr.Jit's own from
+    ``a.T`` the other), the interaction built, the BSDF called, its outputs
+    evaluated together and read back as NumPy arrays."""
+    import drjit as dr
+
+    bsdf = mi.load_dict({"type": "roughconductor", "distribution": "beckmann", "alpha": 0.1})
+    ctx = mi.BSDFContext()
+
+    def vec3(a):
+        return mi.Vector3f(np.ascontiguousarray(a.T, dtype=np.float32))
+
+    def call():
+        si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
+        si.wi = vec3(wi)
+        si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+        if op == "sample":
+            bs, w = bsdf.sample(ctx, si, mi.Float(np.ascontiguousarray(u[:, 0], dtype=np.float32)),
+                                mi.Point2f(np.ascontiguousarray(u[:, 1:].T, dtype=np.float32)))
+            dr.eval(bs.wo, bs.pdf, w)
+            return bs.wo.numpy(), w.numpy(), bs.pdf.numpy()
+        out = (bsdf.eval if op == "eval" else bsdf.pdf)(ctx, si, vec3(wo))
+        return out.numpy()
+
+    return call
+
+
+@needs_drjit
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+@pytest.mark.parametrize("op", ["eval", "pdf", "sample"])
+def test_api_against_roughconductor_from_numpy(benchmark, mi, pairs, op, dtype):
+    """Issue 30's "API ``eval`` of 10^6 pairs from NumPy arrays, against Mitsuba's
+    ``roughconductor`` called on the same NumPy arrays (conversion included), in
+    one run" (target: ratio <= 1), and the same for ``pdf`` and ``sample``.  The
+    API: ``m.eval(wi, wo, backend="drjit")`` of Ashikhmin-Shirley (defaults),
+    NumPy in, NumPy out, validation and normalisation included; the reference:
+    :func:`roughconductor_from_numpy` on the same arrays.  Both compiled first,
+    then ``ROUNDS`` alternating calls of each; medians of wall and CPU seconds
+    (``getrusage``: every thread of the process), and the load average.
+    ``dtype``: the arrays as given to both (float32 arrays enter the API's
+    float64 kernel without a float64 copy)."""
+    from conftest import ROUNDS
+
+    wi, wo, u = (np.asarray(a, dtype=dtype) for a in pairs)
+    m = plausible.make("ashikhmin-shirley")
+    api = {"eval": lambda: m.eval(wi, wo, backend="drjit"), "pdf": lambda: m.pdf(wi, wo, backend="drjit"),
+           "sample": lambda: m.sample(wi, u, backend="drjit")}[op]
+    ref = roughconductor_from_numpy(mi, op, wi, wo, u)
+    api(), ref()
+    times = {"api": [], "ref": []}
+    loads = [os.getloadavg()[0]]
+    for _ in range(max(ROUNDS, 5)):
+        for k, fn in (("api", api), ("ref", ref)):
+            times[k].append(timed(fn)[1:])
+        loads.append(os.getloadavg()[0])
+    med = {k: [float(np.median([t[i] for t in v])) for i in (0, 1)] for k, v in times.items()}
+    record(benchmark, "issue-30", f"API {op} of 10^6 pairs vs roughconductor from NumPy ({dtype})", backend="drjit",
+           op=op, n=len(wi), api_wall_ms=1e3 * med["api"][0], api_cpu_ms=1e3 * med["api"][1],
+           ref_wall_ms=1e3 * med["ref"][0], ref_cpu_ms=1e3 * med["ref"][1],
+           ratio_wall=med["api"][0] / med["ref"][0], ratio_cpu=med["api"][1] / med["ref"][1],
+           load_min=min(loads), load_max=max(loads), load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
 #: ``check(quick=True)`` at a new parameter set: (name, warm-up parameters, the new ones,
 #: their offset by the clock applied to); Ashikhmin-Shirley (anisotropic: 6 azimuths of
 #: energy, 2 of sampling, 4 chi-square incidences) and Cook-Torrance (isotropic).
@@ -183,6 +250,77 @@ def test_fit_as_to_cook_torrance(benchmark, metric, backend_name):
     record(benchmark, "issue-30", f"fit ashikhmin-shirley to cook-torrance m=0.17 rs=0.6, {metric}",
            backend=backend_name, op="fit", n=1, wall_s=wall, cpu_s=cpus, evaluations=int(res.evaluations),
            result=str({k: round(v, 4) for k, v in res.params.items() if isinstance(v, float)}), load=load())
+    benchmark.pedantic(lambda: None, rounds=1, iterations=1)
+
+
+#: A fit in a fresh process: its own CPU seconds (getrusage, all threads), wall
+#: seconds and load around ``plausible.fit`` alone (imports and Dr.Jit's start excluded),
+#: the evaluations, the parameters and every error figure, as JSON.
+_FIT_SCRIPT = """
+import json, os, resource, sys, time
+import plausible, scipy.optimize
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+model, target, metric = sys.argv[1:4]
+c, t = cpu(), time.perf_counter()
+r = plausible.fit(model, target, metric=metric)
+print(json.dumps(dict(cpu_s=cpu() - c, wall_s=time.perf_counter() - t, load=os.getloadavg()[0],
+                      evaluations=r.evaluations, errors=r.errors,
+                      params={k: (v.tolist() if hasattr(v, "tolist") else v) for k, v in r.params.items()})))
+"""
+
+#: The fits of issue 30's fourth session: its target (A-S to Cook-Torrance, both metrics),
+#: a published material and a colour target.
+FIT_CASES = [("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6", "perceptual"),
+             ("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6", "l2-cos"),
+             ("ashikhmin-shirley", "material:nickel@ngan2005/ward", "perceptual"),
+             ("ashikhmin-shirley", "cook-torrance:m=0.17:rs=0.6,0.5,0.4", "perceptual")]
+
+
+def _fit_in(src, model, target, metric) -> dict:
+    import json
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(src)] + [p for p in sys.path if p]))
+    r = subprocess.run([sys.executable, "-c", _FIT_SCRIPT, model, target, metric], env=env,
+                       capture_output=True, text=True, check=True)
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def _max_rel(a: dict, b: dict) -> float:
+    """The largest relative difference between two dicts of numbers (or lists)."""
+    out = 0.0
+    for k, v in a.items():
+        if v is None or b.get(k) is None:
+            continue
+        x, y = np.asarray(v, float), np.asarray(b[k], float)
+        out = max(out, float(np.max(np.abs(x - y) / np.maximum(np.abs(y), 1e-300))))
+    return out
+
+
+@needs_drjit
+@pytest.mark.parametrize("model,target,metric", FIT_CASES, ids=[f"{t.split(':')[0]}-{m}" + ("-colour" if "," in t else "")
+                                                                 for _, t, m in FIT_CASES])
+def test_fit_against_reference_tree(benchmark, model, target, metric):
+    """``plausible.fit(model, target, metric=...)`` in a fresh process of this tree,
+    and, when ``PLAUSIBLE_BENCH_REF_SRC`` names the ``src`` folder of another
+    tree (``main`` before a change: ``git archive COMMIT src | tar -x -C DIR``), of
+    that tree right after it (the reference, same run): CPU and wall seconds of the
+    fit alone, evaluations, the largest relative difference of the parameters and
+    of the error figures between the two."""
+    here = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "src")
+    new = _fit_in(here, model, target, metric)
+    info = dict(wall_s=new["wall_s"], cpu_s=new["cpu_s"], evaluations=new["evaluations"], load=new["load"],
+                perceptual=new["errors"]["perceptual"], params=str(new["params"]))
+    ref_src = os.environ.get("PLAUSIBLE_BENCH_REF_SRC")
+    if ref_src:
+        ref = _fit_in(ref_src, model, target, metric)
+        info.update(ref_wall_s=ref["wall_s"], ref_cpu_s=ref["cpu_s"], ref_evaluations=ref["evaluations"],
+                    ref_load=ref["load"], ref_perceptual=ref["errors"]["perceptual"],
+                    params_max_rel=_max_rel(new["params"], ref["params"]),
+                    errors_max_rel=_max_rel(new["errors"], ref["errors"]))
+    record(benchmark, "issue-30", f"fit {model} to {target}, {metric} (fresh process)", backend="auto", op="fit",
+           n=1, **info)
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
 
 

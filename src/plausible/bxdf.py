@@ -297,10 +297,59 @@ class BxDF:
     def _out_shape(self, shape):
         return shape + ((self.channels,) if self.channels else ())
 
+    def _fused(self, kind: str, backend, names: tuple, args: tuple):
+        """The Dr.Jit front end with the checks and the normalisation inside the
+        kernel (:func:`plausible.arrays.backend.eval_fused`): NumPy arrays enter
+        without a NumPy pass (float32 ones without a float64 copy) and the result is
+        the kernel's output.  Returns ``(result, args)``: ``result`` None where it
+        does not apply (NumPy is picked, a broadcast that is neither one vector nor
+        whole rows) or a kernel found a bad input; the NumPy front end then runs on
+        ``args`` (each converted at most once) and raises its errors in its order."""
+        raw = tuple(D.raw_rows(w) for w in args)
+        if any(r is None for r in raw):
+            return None, args
+        try:
+            if _backend.requested(backend) == "numpy":
+                return None, raw
+            shape = np.broadcast_shapes(*(r.shape for r in raw))[:-1]
+            n = int(np.prod(shape))
+            if (n * (self.channels or 1) > _backend.FUSED_MAX_LANES
+                    or _backend.choose(n, self, backend, kernel=kind) != "drjit"):
+                return None, raw
+            inputs = tuple(self._fused_input(name, r, shape) for name, r in zip(names, raw))
+        except ValueError:   # the NumPy front end raises it, after the checks that come first
+            return None, raw
+        fused = {"eval": _backend.eval_fused, "pdf": _backend.pdf_fused}.get(kind)
+        if fused is None:
+            run = lambda: _backend.sample_fused(self, *inputs, shape, HORIZON, D.unit_lanes,  # noqa: E731
+                                                D.interval_lanes)
+        else:
+            run = lambda: fused(self, *inputs, shape, D.unit_lanes)  # noqa: E731
+        out = _backend.run(self, kind, lambda: None, run)
+        if out is None or out[-1]:
+            return None, raw
+        return (out[0] if len(out) == 2 else Sample(*out[:3])), raw
+
+    @staticmethod
+    def _fused_input(name: str, a: np.ndarray, shape: tuple) -> np.ndarray:
+        """One input of :meth:`_fused`: one vector checked (and normalised) here, as
+        float64 ``(3,)``; else whole rows of ``shape``, raw and C-contiguous.  Raises
+        ValueError where the fused path does not apply."""
+        if a.size == 3:
+            a = np.asarray(a, dtype=np.float64).reshape(3)
+            return D.as_unit_interval(a) if name == "u" else D.checked_unit(name, a)
+        if a.shape[:-1] != shape:
+            raise ValueError("a broadcast the fused front end does not read")
+        return np.ascontiguousarray(a).reshape(-1, 3)
+
     def eval(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """BRDF value ``f(wi, wo)`` (no cosine factor).  Batches of more than
         :data:`plausible.directions.CHUNK` pairs are evaluated ``CHUNK`` pairs at a time.  ``backend``:
-        ``"auto"``, ``"numpy"`` or ``"drjit"`` (:mod:`plausible.arrays.backend`)."""
+        ``"auto"``, ``"numpy"`` or ``"drjit"`` (:mod:`plausible.arrays.backend`); on Dr.Jit the
+        checks and the normalisation run in the kernel (:meth:`_fused`)."""
+        out, (wi, wo) = self._fused("eval", backend, ("wi", "wo"), (wi, wo))
+        if out is not None:
+            return out
         (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
@@ -323,6 +372,9 @@ class BxDF:
     def pdf(self, wi, wo, *, backend: str | None = None) -> np.ndarray:
         """Solid-angle density of :meth:`sample` producing ``wo`` from ``wi``
         (chunked like :meth:`eval`; ``backend`` as there)."""
+        out, (wi, wo) = self._fused("pdf", backend, ("wi", "wo"), (wi, wo))
+        if out is not None:
+            return out
         (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
         shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
         n = int(np.prod(shape))
@@ -345,6 +397,9 @@ class BxDF:
     def sample(self, wi, u, *, backend: str | None = None) -> Sample:
         """Importance-sample ``wo`` given ``wi`` from uniform numbers ``u`` (..., 3)
         (chunked like :meth:`eval`; ``backend`` as there)."""
+        out, (wi, u) = self._fused("sample", backend, ("wi", "u"), (wi, u))
+        if out is not None:
+            return out
         wi, wi_unit = D.prepare("wi", wi)
         u = D.as_unit_interval(u)
         shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arrays.ops import NP
 from .text import shorten
 
 #: Largest number of direction pairs evaluated in one NumPy pass; bigger batches
@@ -48,11 +49,6 @@ def norm2(a: np.ndarray) -> np.ndarray:
     return x * x + y * y + z * z
 
 
-def _max_abs(a: np.ndarray) -> np.ndarray:
-    """The largest ``|component|`` of each row of ``a`` (shape ``(..., 3)``)."""
-    return np.maximum(np.maximum(np.abs(a[..., 0]), np.abs(a[..., 1])), np.abs(a[..., 2]))
-
-
 #: ``|a|^2`` outside ``(_SAFE_LO, _SAFE_HI)`` may have under- or overflowed: those
 #: rows are rescaled by their largest component before normalising.
 _SAFE_LO, _SAFE_HI = 1e-290, 1e290
@@ -68,7 +64,7 @@ def _check_block(name: str, b: np.ndarray, check_zero: bool = True):
         raise ValueError(f"{name} must be finite (found NaN or inf)")
     if check_zero:
         z = s == 0  # |b|^2 may underflow for a tiny non-zero b (1e-170): ask its components
-        if np.any(z) and np.any(_max_abs(b[z]) == 0):
+        if np.any(z) and np.any(max_abs(NP, split(b[z])) == 0):
             raise ValueError(f"{name} must be non-zero vectors (a zero vector has no direction)")
     return s
 
@@ -83,6 +79,64 @@ def check_directions(name: str, a: np.ndarray) -> None:
         _check_block(name, b)
 
 
+def max_abs(ops, c):
+    """The largest ``|component|`` of the components ``c``, against an ops namespace."""
+    x, y, z = c
+    return ops.maximum(ops.maximum(ops.abs(x), ops.abs(y)), ops.abs(z))
+
+
+def safe_norm2(s):
+    """Whether ``|a|^2 = s`` is free of under- and overflow (:func:`normalise`)."""
+    return (s > _SAFE_LO) & (s < _SAFE_HI)
+
+
+def unit_components(ops, c, s, keep=True):
+    """The formula of :func:`normalise`, component-wise against an ops namespace
+    (:mod:`plausible.arrays.ops`): each of ``c`` kept where ``keep`` and
+    ``| s - 1 | <= UNIT_TOL``, else divided by ``sqrt(s)`` (``s = |c|^2``).  NumPy
+    passes ``c = (a,)`` and ``s[..., None]``; :func:`unit_lanes` the three
+    components of each lane, bitwise the same values."""
+    keep = keep & (ops.abs(s - 1.0) <= UNIT_TOL)
+    r = ops.sqrt(s)
+    return tuple(ops.where(keep, x, x / r) for x in c)
+
+
+#: The largest finite float64: ``|x| <= DBL_MAX`` is False for NaN and infinities.
+_DBL_MAX = float(np.finfo(np.float64).max)
+
+
+def unit_lanes(ops, c):
+    """:func:`check_directions` and :func:`normalise` for the components ``c`` of one
+    direction per lane, against an ops namespace (the Dr.Jit front end's kernels
+    run it on raw input): ``(unit components, bad)``, ``bad`` True where a
+    component is NaN or infinite or all three are zero (the caller then raises
+    NumPy's errors, :func:`prepare`).  One path for every lane: a row whose
+    ``|c|^2`` may under- or overflow is divided by its largest component first
+    (the others by 1, exactly), as :func:`normalise` does for those rows alone;
+    the values are bitwise :func:`normalise`'s."""
+    x, y, z = c
+    s = x * x + y * y + z * z
+    safe = safe_norm2(s)
+    m = ops.where(safe, 1.0, max_abs(ops, c))
+    t = tuple(v / m for v in c)
+    tx, ty, tz = t
+    unit = unit_components(ops, t, ops.where(safe, s, tx * tx + ty * ty + tz * tz), keep=safe)
+    finite = (ops.abs(x) <= _DBL_MAX) & (ops.abs(y) <= _DBL_MAX) & (ops.abs(z) <= _DBL_MAX)
+    return unit, ~finite | ((x == 0) & (y == 0) & (z == 0))
+
+
+def outside_unit_interval(x):
+    """Where ``x`` is not in ``[0, 1]`` (NaN included): the check of :func:`as_unit_interval`."""
+    return ~((x >= 0) & (x <= 1))
+
+
+def interval_lanes(ops, c):
+    """:func:`as_unit_interval`'s check for the components ``c`` of ``u`` per lane
+    (as :func:`unit_lanes`): ``(c, bad)``, ``bad`` where a component is outside ``[0, 1]``."""
+    x, y, z = c
+    return c, outside_unit_interval(x) | outside_unit_interval(y) | outside_unit_interval(z)
+
+
 def normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
     """``a / |a|`` (``s``: ``norm2(a)`` if already computed).  Rows whose
     ``|a|^2`` under- or overflows (components below 1e-145 or above 1e145) are
@@ -92,15 +146,16 @@ def normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
     kept as given: normalising twice moves a direction by an ulp, and a density
     that is steep there (a ``cos^n`` lobe with ``n < 1`` near its edge, a
     direction at the horizon threshold) would then differ from the pdf that
-    ``sample`` returned for it."""
+    ``sample`` returned for it.  (:func:`unit_components` is the formula, shared
+    with the Dr.Jit front end's :func:`unit_lanes`.)"""
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
         s = norm2(a) if s is None else s
-        out = np.where((np.abs(s - 1.0) <= UNIT_TOL)[..., None], a, a / np.sqrt(s)[..., None])
-        bad = ~((s > _SAFE_LO) & (s < _SAFE_HI))
+        out, = unit_components(NP, (a,), s[..., None])
+        bad = ~safe_norm2(s)
         if np.any(bad):
             b = np.broadcast_to(a, out.shape)[bad]
-            b = b / _max_abs(b)[..., None]
-            out[bad] = b / np.sqrt(norm2(b))[..., None]
+            b = b / max_abs(NP, split(b))[..., None]
+            out[bad], = unit_components(NP, (b,), norm2(b)[..., None], keep=False)
     return out
 
 
@@ -130,6 +185,21 @@ def prepare(name: str, w):
     return a, False
 
 
+def raw_rows(w):
+    """``w`` as an array of shape ``(..., 3)`` for a front end that validates and
+    normalises inside its kernel: a float32 or float64 array as given (no NumPy
+    pass, no float64 copy of float32 input), anything else converted to float64;
+    None where that fails or the shape is wrong (:func:`prepare` then raises)."""
+    if isinstance(w, np.ndarray) and w.dtype in (np.float32, np.float64):
+        a = w
+    else:
+        try:
+            a = np.asarray(w, dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
+    return a if a.ndim > 0 and a.shape[-1] == 3 else None
+
+
 def unit_fn(unit: bool):
     return (lambda a: a) if unit else normalise
 
@@ -143,7 +213,7 @@ def as_unit_interval(u) -> np.ndarray:
     if u.ndim == 0 or u.shape[-1] != 3:
         raise ValueError(f"u must have shape (..., 3), got {u.shape}")
     for b in _blocks(u):
-        bad = ~((b >= 0) & (b <= 1))
+        bad = outside_unit_interval(b)
         if np.any(bad):
             raise ValueError(f"u must lie in [0, 1], got {float(b[bad][0])!r}")
     return u
@@ -185,4 +255,5 @@ def stack(c):
 
 
 __all__ = ["CHUNK", "UNIT_TOL", "as_array", "as_directions", "as_unit_interval", "check_directions", "chunked",
-           "norm2", "normalise", "prepare", "split", "stack", "unit_fn"]
+           "interval_lanes", "max_abs", "norm2", "normalise", "outside_unit_interval", "prepare", "raw_rows",
+           "safe_norm2", "split", "stack", "unit_components", "unit_fn", "unit_lanes"]

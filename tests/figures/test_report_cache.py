@@ -180,3 +180,20 @@ def test_an_interrupted_parallel_run_ends_its_workers_and_leaves_no_partial_fold
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
     assert not (tmp_path / "sleep").exists() and (tmp_path / "index.html").exists()
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] in (16, 32)   # whole, of one run
+
+
+def test_a_follower_is_made_by_the_worker_that_made_its_leader(monkeypatch):
+    """figures.report._next: a figure whose albedo curves another one computes first
+    (FOLLOWS) waits for it and goes to the worker that made it, which remembers them."""
+    from plausible.figures import report
+
+    monkeypatch.setattr(report, "FOLLOWS", {"b": "a"})
+    todo = [("b", 1), ("a", 2), ("c", 3)]           # longest first: b before its leader
+    assert report._next(todo, busy=set()) == 1      # a fresh worker takes the leader, not b
+    todo.pop(1)
+    assert report._next(todo, busy={"a"}) == 1      # another worker: c, while a is being made
+    assert report._next(todo, busy=set(), done="a") == 0    # the worker that made a: b
+    assert report._next([("b", 1)], busy={"a"}) == 0        # nothing else left: b anyway
+    assert report._next([], busy=set()) is None
+    monkeypatch.setattr(report, "FOLLOWS", {})
+    assert report._next([("b", 1), ("a", 2)], busy=set()) == 0   # no leaders: the order as given

@@ -105,20 +105,25 @@ def albedo_curve_of_sum(model, thetas_deg=THETAS_DEG, tol: float = ALBEDO_TOL):
     return vals, errs
 
 
-def check_fit(name: str, fit: str, thetas_deg=THETAS_DEG, quick: bool = False) -> FitCheck:
+def check_fit(name: str, fit: str, thetas_deg=THETAS_DEG, quick: bool = False, albedo_tol=None) -> FitCheck:
     """The :class:`FitCheck` of one material of one fit set."""
-    return check_model(material(name, fit), name, fit, thetas_deg, quick=quick)
+    return check_model(material(name, fit), name, fit, thetas_deg, quick=quick, albedo_tol=albedo_tol)
 
 
-def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG, quick: bool = False) -> FitCheck:
+def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG, quick: bool = False,
+                albedo_tol=None) -> FitCheck:
     """The :class:`FitCheck` of any :class:`~plausible.models.sum.Sum` (``name``
     and ``fit`` only label the row).  ``quick``: albedos to :data:`QUICK_TOL`,
-    reciprocity on the :data:`QUICK_RECIPROCITY` grid."""
+    reciprocity on the :data:`QUICK_RECIPROCITY` grid.  ``albedo_tol``: the albedos'
+    error bound alone (default: :data:`QUICK_TOL` when ``quick``, else the
+    integrator's default), the reciprocity grid kept."""
     if quick:
         rec = reciprocity(model, n_theta=QUICK_RECIPROCITY[0], n_phi=QUICK_RECIPROCITY[1])
     else:
         rec = reciprocity(model)
-    vals, errs = albedo_curve_of_sum(model, thetas_deg, QUICK_TOL if quick else ALBEDO_TOL)
+    if albedo_tol is None:
+        albedo_tol = QUICK_TOL if quick else ALBEDO_TOL
+    vals, errs = albedo_curve_of_sum(model, thetas_deg, albedo_tol)
     i, c = np.unravel_index(int(np.argmax(vals)), vals.shape)
     return FitCheck(name, fit, float(rec.figure), float(vals[i, c]), float(thetas_deg[i]),
                     CHANNELS[c] if vals.shape[1] == 3 else "grey", float(np.max(vals[0])),
@@ -140,14 +145,14 @@ def work_list(fits=None, names=None) -> list[tuple]:
     return out
 
 
-def _check_chunk(chunk, thetas_deg, quick):
-    return [check_fit(name, key, thetas_deg, quick) for name, key in chunk]
+def _check_chunk(chunk, thetas_deg, quick, albedo_tol=None):
+    return [check_fit(name, key, thetas_deg, quick, albedo_tol) for name, key in chunk]
 
 
 def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, quick: bool = False,
-               jobs: int = 1) -> list[FitCheck]:
+               jobs: int = 1, albedo_tol=None) -> list[FitCheck]:
     """:func:`check_fit` of every material (or ``names``) of every loadable fit
-    set (or ``fits``; see :func:`work_list`).  ``progress``, if given, is called
+    set (or ``fits``; see :func:`work_list`; ``albedo_tol`` as in :func:`check_model`).  ``progress``, if given, is called
     with no argument after each fit.  ``jobs`` > 1: that many worker processes,
     each checking runs of consecutive fits of one set (they share one compiled
     kernel per model structure); the rows come back in the same order."""
@@ -155,7 +160,7 @@ def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, q
     if jobs <= 1 or len(work) < 2:
         rows = []
         for name, key in work:
-            rows.append(check_fit(name, key, thetas_deg, quick))
+            rows.append(check_fit(name, key, thetas_deg, quick, albedo_tol))
             if progress:
                 progress()
         return rows
@@ -165,7 +170,8 @@ def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, q
     chunks = [work[s:s + size] for s in range(0, len(work), size)]
     rows = []
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for got in pool.map(_check_chunk, chunks, [thetas_deg] * len(chunks), [quick] * len(chunks)):
+        for got in pool.map(_check_chunk, chunks, [thetas_deg] * len(chunks), [quick] * len(chunks),
+                            [albedo_tol] * len(chunks)):
             rows.extend(got)
             if progress:
                 for _ in got:

@@ -3,7 +3,8 @@
 The NumPy front end (:meth:`plausible.bxdf.BxDF.eval`, ``pdf``, ``sample``) and
 the analysis built on it validate their input and shape their output with
 NumPy, and hand the arithmetic, the hooks ``_f``, ``_pdf`` and ``_sample``, to
-one of two backends of the same formulas:
+one of two backends of the same formulas (on Dr.Jit, ``eval``/``pdf``/``sample``
+check and normalise their raw input inside the kernel: :func:`eval_fused`):
 
 * ``"numpy"`` -- :data:`plausible.arrays.ops.NP`, one temporary array per operation;
 * ``"drjit"`` -- :func:`plausible.arrays.ops.drjit_ops` on ``drjit.llvm.Float64``: the
@@ -294,6 +295,17 @@ class _Lanes:
         flat = F(np.ascontiguousarray(a, dtype=np.float64).reshape(-1))
         return tuple(dr.gather(F, flat, self.row * 3 + k) for k in range(3))
 
+    def raw_vectors(self, a: np.ndarray, check):
+        """Components of the raw rows ``a`` (``(rows, 3)``, float32 or float64,
+        C-contiguous; neither validated nor normalised) read per lane and converted
+        to float64 in the kernel, through ``check(ops, components) -> (components,
+        bad)`` (:func:`plausible.directions.unit_lanes`, or the identity with a check
+        for ``u``).  ``a`` enters without a copy: Dr.Jit maps contiguous host memory."""
+        dr, F = self.dr, self.Float64
+        T = F if a.dtype == np.float64 else self.dr.llvm.Float32
+        flat = T(a.reshape(-1))
+        return check(self.ops, tuple(F(dr.gather(T, flat, self.row * 3 + k)) for k in range(3)))
+
     def gather_rows(self, x):
         """A per-row array (``rows`` lanes) read per lane (``rows x reps``)."""
         if self.reps == 1 or not _is_jit(x):
@@ -338,20 +350,75 @@ def kernel_view(model, dr, F, chan, reps: int):
     return model._kernel_view(convert)
 
 
-class PairKernel:
-    """``f`` of many models at fixed direction pairs on Dr.Jit: the pairs enter
-    once (unit ``(n, 3)`` arrays; the caller validates and normalises them), and
-    each call traces ``model._f`` with the model's parameters as kernel data, so
-    every model of one structure runs the same compiled kernel (a fit's
-    objective, a parameter sweep).  ``kernel(model)`` is ``model.eval(wi, wo)``:
-    ``(n,)`` or ``(n, channels)``; a model whose hooks do not run on Dr.Jit
-    gets NumPy's ``model.eval`` (the rule of :func:`run`)."""
+def lane_divmod(dr, F, x, d: int):
+    """``(x // d, x % d)`` of lane numbers ``x`` (a Float64 array of whole numbers)
+    by a whole number ``d``, in float64 arithmetic: exact for fewer than 2^40
+    lanes, and a vectorised multiply-floor is much faster than integer
+    division, which LLVM does lane by lane.  ``d`` enters as kernel data."""
+    q = dr.floor((x + 0.5) * dr.opaque(F, 1.0 / d))
+    return q, x - q * dr.opaque(F, float(d))
 
-    def __init__(self, wi: np.ndarray, wo: np.ndarray):
+
+def data_leaves(model) -> list:
+    """The data parameters of ``model`` (the values :func:`kernel_view` converts),
+    in the order its ``_kernel_view`` visits them."""
+    out = []
+
+    def record(v):
+        out.append(v)
+        return v
+
+    model._kernel_view(record)
+    return out
+
+
+def _batch_tables(models):
+    """The data leaves of ``models`` side by side, one ``(K, size)`` float array per
+    leaf; None when the models do not share one structure leaf by leaf (then they
+    cannot share a launch)."""
+    st = structure_of(models[0])
+    if st is None or any(structure_of(m) != st for m in models[1:]):
+        return None
+    per = [data_leaves(m) for m in models]
+    if any(len(p) != len(per[0]) for p in per):
+        return None
+    tables = []
+    for vals in zip(*per):
+        shapes = {np.shape(v) for v in vals}
+        if len(shapes) != 1:
+            return None
+        tables.append(np.array([np.asarray(v, dtype=np.float64).reshape(-1) for v in vals]))
+    return tables
+
+
+class PairKernel:
+    """``f`` of many models at fixed direction pairs: the pairs enter once (unit
+    ``(n, 3)`` arrays; the caller validates and normalises them).
+
+    On Dr.Jit (``backend="drjit"``, the default) each call traces ``model._f``
+    with the model's parameters as kernel data, so every model of one
+    structure runs the same compiled kernel (a fit's objective, a parameter
+    sweep).  ``kernel(model)`` is ``model.eval(wi, wo)``: ``(n,)`` or
+    ``(n, channels)``; a model whose hooks do not run on Dr.Jit gets NumPy's
+    ``model.eval`` (the rule of :func:`run`).  With ``backend="numpy"`` the
+    hooks run on NumPy (the pairs are not validated again at each call).
+
+    :meth:`many` evaluates a whole population of models of one structure (an
+    optimiser's finite-difference points, a batch of candidates) together: ``K``
+    models are ``K x n`` lanes in one Dr.Jit launch, each lane reading its
+    model's parameters from a ``K``-row table, or on NumPy one pass with every
+    parameter an array of ``K`` rows broadcast against the pairs.  The values
+    are those of ``K`` single calls to rounding (``tests/fitting/test_fit.py``:
+    1e-12)."""
+
+    def __init__(self, wi: np.ndarray, wo: np.ndarray, backend: str = "drjit"):
         self.wi = np.ascontiguousarray(wi, dtype=np.float64).reshape(-1, 3)
         self.wo = np.ascontiguousarray(wo, dtype=np.float64).reshape(-1, 3)
         if self.wi.shape != self.wo.shape:
             raise ValueError(f"PairKernel: wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
+        if backend not in ("numpy", "drjit"):
+            raise ValueError(f"PairKernel: backend must be 'numpy' or 'drjit', got {backend!r}")
+        self.backend = backend
         self.n = len(self.wi)
         self._lanes = {}
 
@@ -370,10 +437,101 @@ class PairKernel:
         f = v._f(L.ops, wi, wo, v.p)
         return L.numpy(f, self.n * c).reshape((self.n, c) if model.channels else (self.n,))
 
+    def _numpy(self, model):
+        return model._eval_block(self.wi, self.wo, (self.n,), "numpy")
+
     def __call__(self, model) -> np.ndarray:
+        if self.backend == "numpy":
+            return self._numpy(model)
         if model in _NUMPY_ONLY:
             return model.eval(self.wi, self.wo, backend="numpy")
         return run(model, "eval", lambda: model.eval(self.wi, self.wo, backend="numpy"), lambda: self._jit(model))
+
+    def many(self, models) -> list:
+        """``[self(m) for m in models]``, the models evaluated together (see the
+        class); models that cannot share a pass (different structures, hooks that
+        need their parameters as constants or NumPy) are evaluated one by one."""
+        models = list(models)
+        if len(models) < 2:
+            return [self(m) for m in models]
+        tables = _batch_tables(models)
+        if tables is not None:
+            try:
+                if self.backend == "numpy":
+                    return self._numpy_many(models, tables)
+                st = structure_of(models[0])
+                if st not in _CONSTANTS and not any(m in _NUMPY_ONLY for m in models):
+                    token = _AS_DATA.set(True)
+                    try:
+                        with _JIT_LOCK:
+                            return self._jit_many(models, tables)
+                    finally:
+                        _AS_DATA.reset(token)
+            except (_NotJit, TypeError, AttributeError, ValueError, RuntimeError, IndexError):
+                # a hook that branches on a value or calls NumPy on Dr.Jit arrays: one by one
+                pass
+        return [self(m) for m in models]
+
+    def _shape(self, model, K):
+        return (K, self.n) + ((model.channels,) if model.channels else ())
+
+    def _numpy_many(self, models, tables):
+        from .ops import NP
+
+        m0, K = models[0], len(models)
+        c = m0.channels
+        it = iter(tables)
+
+        def convert(v):
+            t = next(it)
+            if t.shape[1] == 1:         # a float: one value per model
+                return t.reshape((K, 1, 1) if c else (K, 1))
+            if c and t.shape[1] == c:   # a colour: one row of channels per model
+                return t.reshape(K, 1, c)
+            if not np.all(t == t[:1]):
+                raise _NotJit("a data array that is not a colour differs between the models")
+            return v
+
+        view = m0._kernel_view(convert)
+        comps = lambda a: tuple(x[:, None] if c else x for x in (a[:, 0], a[:, 1], a[:, 2]))  # noqa: E731
+        with np.errstate(all="ignore"):
+            f = view._f(NP, comps(self.wi), comps(self.wo), view.p)
+        out = np.array(np.broadcast_to(f, self._shape(m0, K)), dtype=np.float64)
+        return list(out)
+
+    def _jit_many(self, models, tables):
+        dr, F, U, ops = _dr()
+        m0, K = models[0], len(models)
+        c = m0.channels or 1
+        per = self.n * c
+        lane = F(dr.arange(U, K * per))
+        k, r = lane_divmod(dr, F, lane, per)
+        row, chan = lane_divmod(dr, F, r, c) if c > 1 else (r, None)
+        k, row = U(k), U(row)
+        chan = U(chan) if c > 1 else None
+        _, wi1, wo1 = self._block(1)
+        wi = tuple(dr.gather(F, x, row) for x in wi1)
+        wo = tuple(dr.gather(F, x, row) for x in wo1)
+        it = iter(tables)
+
+        def convert(v):
+            t = next(it)
+            if t.shape[1] == 1:
+                return dr.gather(F, F(t.reshape(-1)), k)
+            if c > 1 and t.shape[1] == c:
+                return dr.gather(F, F(t.reshape(-1)), k * dr.opaque(U, c) + chan)
+            if not np.all(t == t[:1]):
+                raise _NotJit("a data array that is not a colour differs between the models")
+            return v
+
+        view = m0._kernel_view(convert)
+        f = view._f(ops, wi, wo, view.p)
+        if not _is_jit(f):
+            raise _NotJit(type(f).__name__)
+        a = np.asarray(F(f).numpy(), dtype=np.float64)
+        if a.size != K * per:
+            raise _NotJit(f"{a.size} values for {K * per} lanes")
+        return list(a.reshape(self._shape(m0, K)))
 
 
 def _is_jit(x) -> bool:
@@ -410,48 +568,122 @@ def pdf_block(model, wi: np.ndarray, wo: np.ndarray, shape: tuple) -> np.ndarray
     return L.numpy(v, n).reshape(shape)
 
 
+# -- the front end fused into the kernel: raw NumPy input, validation and normalisation on Dr.Jit
+
+#: Lanes of one fused launch stay below this (a ``UInt32`` index of ``rows * reps * 3``).
+FUSED_MAX_LANES = (1 << 32) // 3 - 1
+
+
+def _inputs(L, a: np.ndarray, check):
+    """``(components, bad)`` of one input of a fused call: one vector (``(3,)``,
+    validated and normalised by the caller) as opaque scalars and ``bad`` None,
+    else its raw rows through ``check`` (:meth:`_Lanes.raw_vectors`)."""
+    if a.size == 3:
+        return L.vectors(a), None
+    return L.raw_vectors(a, check)
+
+
+def _launch(L, values, masks):
+    """Evaluate ``values`` (hook results and Python numbers) and the union of the
+    bad ``masks`` in one kernel.  Returns ``(jit values, any bad)``."""
+    dr = L.dr
+    bad = None
+    for m in masks:
+        if m is not None:
+            bad = m if bad is None else bad | m
+    jit = [v for v in values if _is_jit(v)]
+    dr.eval(*jit, *(() if bad is None else (bad,)))
+    return values, bool(bad is not None and np.any(bad.numpy()))
+
+
+def eval_fused(model, wi: np.ndarray, wo: np.ndarray, shape: tuple, unit) -> tuple:
+    """:func:`eval_block` on raw ``wi``, ``wo`` (each one unit vector ``(3,)`` or
+    raw rows of ``shape``; float32 or float64, C-contiguous): ``unit`` validates and
+    normalises them in the same kernel as ``model._f``
+    (:func:`plausible.directions.unit_lanes`).  Returns ``(values, bad)``: ``bad``
+    True when a direction was NaN, infinite or zero (``values`` then mean nothing;
+    the caller's NumPy checks raise the error)."""
+    n = int(np.prod(shape))
+    c = model.channels or 1
+    L = _Lanes(n, c)
+    v = L.view(model)
+    (a, bad_a), (b, bad_b) = _inputs(L, wi, unit), _inputs(L, wo, unit)
+    (f,), bad = _launch(L, [v._f(L.ops, a, b, v.p)], (bad_a, bad_b))
+    return L.numpy(f, n * c).reshape(shape + ((model.channels,) if model.channels else ())), bad
+
+
+def pdf_fused(model, wi: np.ndarray, wo: np.ndarray, shape: tuple, unit) -> tuple:
+    """:func:`pdf_block` on raw input (as :func:`eval_fused`)."""
+    n = int(np.prod(shape))
+    L = _Lanes(n)
+    m = L.view(model)
+    (a, bad_a), (b, bad_b) = _inputs(L, wi, unit), _inputs(L, wo, unit)
+    (v,), bad = _launch(L, [m._pdf(L.ops, a, b, m.q)], (bad_a, bad_b))
+    return L.numpy(v, n).reshape(shape), bad
+
+
 def sample_block(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: float):
     """``model._sample`` on Dr.Jit with the front end's bookkeeping (see
     :meth:`plausible.bxdf.BxDF._sample_block`, whose steps this repeats in the same
     order): normalise ``wo`` (a zero vector becomes ``(0, 0, -1)``), its pdf, ``f``,
     the validity mask, ``weight = f cos / pdf``.  Returns ``(wo, weight, pdf)``."""
+    wi_in = lambda L: (L.vectors(_rows(wi, shape)), None)  # noqa: E731 - the lanes of one input
+    u_in = lambda L: (L.vectors(_rows(u, shape)), None)  # noqa: E731
+    return _sample(model, shape, horizon, wi_in, u_in)[:3]
+
+
+def sample_fused(model, wi: np.ndarray, u: np.ndarray, shape: tuple, horizon: float, unit, interval) -> tuple:
+    """:func:`sample_block` on raw ``wi`` and ``u`` (as :func:`eval_fused`): ``unit``
+    validates and normalises ``wi`` in the kernel, ``interval(ops, components) ->
+    (components, bad)`` checks ``u``.  Returns ``(wo, weight, pdf, bad)``."""
+    return _sample(model, shape, horizon, lambda L: _inputs(L, wi, unit), lambda L: _inputs(L, u, interval))
+
+
+def _sample(model, shape, horizon, wi_in, u_in):
+    """The steps of :func:`sample_block`; ``wi_in(lanes)``, ``u_in(lanes)``: the
+    inputs' ``(components, bad)`` read per lane.  One launch (two for a colour
+    model: ``f`` per channel lane), every output evaluated together."""
     n = int(np.prod(shape))
     L = _Lanes(n)
     dr, ops = L.dr, L.ops
-    wi_c = L.vectors(_rows(wi, shape))
-    u_c = L.vectors(_rows(u, shape))
+    (wi_c, bad_wi), (u_c, bad_u) = wi_in(L), u_in(L)
     mv = L.view(model)
     wo_c = mv._sample(ops, wi_c, u_c, mv.q)
     wo_c = tuple(x if _is_jit(x) else L.Float64(float(x)) for x in wo_c)
     if not all(_is_jit(x) for x in wo_c):
         raise _NotJit("sample")
+    # the sampled direction, normalised (a zero vector becomes (0, 0, -1))
     x, y, z = wo_c
     nrm = dr.sqrt(x * x + y * y + z * z)
     pos = nrm > 0
     den = dr.select(pos, nrm, 1.0)
     x, y, z = (dr.select(pos, x / den, 0.0), dr.select(pos, y / den, 0.0), dr.select(pos, z / den, -1.0))
     wo_c = (x, y, z)
+    # its pdf, the validity mask, cos / pdf
     pdf = mv._pdf(ops, wi_c, wo_c, mv.q)
     ok = (pdf > 1e-250) & (z > horizon) & (wi_c[2] > horizon)
     cos_over_pdf = dr.select(ok, z / dr.select(ok, pdf, 1.0), 0.0)
     pdf = dr.select(ok, pdf, 0.0)
     if model.channels:
+        # f per channel lane, in a second launch that reads the first one's rows
         c = model.channels
-        dr.eval(x, y, z, cos_over_pdf, pdf)
+        cos_over_pdf = dr.select(ok, cos_over_pdf, -1.0)   # -1: not a valid sample (ratios are >= 0)
+        (x, y, z, cos_over_pdf, pdf), bad = _launch(L, [x, y, z, cos_over_pdf, pdf], (bad_wi, bad_u))
         C = _Lanes(n, c)
         wo_l = tuple(C.gather_rows(v) for v in (x, y, z))
-        wi_l = C.vectors(_rows(wi, shape))
         cv = C.view(model)
-        f = cv._f(ops, wi_l, wo_l, cv.p)
+        f = cv._f(ops, wi_in(C)[0], wo_l, cv.p)
         r = C.gather_rows(cos_over_pdf)
-        okc = C.gather_rows(dr.select(ok, L.Float64(1.0), L.Float64(0.0))) > 0.5
-        weight = L.numpy(dr.select(okc, f * r, 0.0), n * c).reshape(shape + (c,))
+        (w,), _ = _launch(C, [dr.select(r >= 0, f * r, 0.0)], ())
+        weight = L.numpy(w, n * c).reshape(shape + (c,))
     else:
         f = mv._f(ops, wi_c, wo_c, mv.p)
-        weight = L.numpy(dr.select(ok, f * cos_over_pdf, 0.0), n).reshape(shape)
-    wo = np.stack([L.numpy(v, n) for v in wo_c], axis=-1).reshape(shape + (3,))
-    return wo, weight, L.numpy(pdf, n).reshape(shape)
+        (w, x, y, z, pdf), bad = _launch(L, [dr.select(ok, f * cos_over_pdf, 0.0), x, y, z, pdf], (bad_wi, bad_u))
+        weight = L.numpy(w, n).reshape(shape)
+    wo = np.stack([L.numpy(v, n) for v in (x, y, z)], axis=-1).reshape(shape + (3,))
+    return wo, weight, L.numpy(pdf, n).reshape(shape), bad
 
 
-__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "PairKernel", "choose", "drjit_available",
-           "kernel_key", "kernel_log", "kernel_view", "requested", "run", "structure_of", "use"]
+__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "choose",
+           "data_leaves", "drjit_available", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "lane_divmod",
+           "pdf_fused", "requested", "run", "sample_fused", "structure_of", "use"]

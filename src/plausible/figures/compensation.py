@@ -8,7 +8,7 @@ import numpy as np
 import plausible
 
 from . import scenes as S
-from .core import figure
+from .core import CURVE_TOL, figure
 from .paper_as import _patch_check as patch_check
 
 #: Roughness of the bases (GGX alpha; Beckmann RMS slope m of Cook-Torrance), and in quick mode.
@@ -60,7 +60,8 @@ def models_of(kind, base):
         "GGX roughconductor (Mitsuba, through the adapter) and Cook-Torrance (Beckmann, V-groove G), Fresnel 1: "
         "albedo against incidence and white-furnace spheres over roughness for the base, pumped up once and "
         "Kulla-Conty's multiple-scattering lobe added; reciprocity measured for each, and for the non-reciprocal "
-        "practice of dividing by the albedo at the incidence only (1/E(wi)).", renders=True,
+        "practice of dividing by the albedo at the incidence only (1/E(wi)). Albedo curves to an error bound of 1e-5.",
+        renders=True,
         roughness="GGX alpha and Beckmann m 0.3, 0.6, 1.0 (quick mode: Cook-Torrance m = 0.6)")
 def compensation(ctx, roughness):
     import matplotlib
@@ -83,7 +84,7 @@ def compensation(ctx, roughness):
         ctx.tick()
         ax = axes[0, k]
         for name, style in METHODS:
-            a = np.asarray(plausible.albedo_curve(models[name], thetas_deg=THETAS).value)
+            a = np.asarray(plausible.albedo_curve(models[name], thetas_deg=THETAS, tol=CURVE_TOL).value)
             a = a if a.ndim == 1 else a.max(axis=-1)
             ax.plot(THETAS, a, style, label=name)
             ctx.table(f"albedo-{k}-{name}", {"theta_deg": THETAS, "albedo": a}, f"{label}: {name}")

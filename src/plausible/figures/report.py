@@ -28,6 +28,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
+from ..integrals.albedo import remembering
 from ..progress import start
 from ..text import fmt
 from .core import FIGURES, Context, get, names
@@ -187,34 +188,35 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     results = {}
     t_all = time.time()
     name = ""
-    try:
-        make = []
-        for name in todo:
-            key = input_key(FIGURES[name], resolution=resolution, spp=spp, quick=quick, src=src)
-            m = None if force else _cached(out / name, key)
-            if m is not None:
-                m["cached"] = True
-                console.print(f"{escape(name):<22} cached")
-                results[name] = m
+    with remembering():     # an albedo asked again by another figure of this process is not recomputed
+        try:
+            make = []
+            for name in todo:
+                key = input_key(FIGURES[name], resolution=resolution, spp=spp, quick=quick, src=src)
+                m = None if force else _cached(out / name, key)
+                if m is not None:
+                    m["cached"] = True
+                    console.print(f"{escape(name):<22} cached")
+                    results[name] = m
+                else:
+                    make.append((name, key))
+            if jobs > 1 and len(make) > 1:
+                _run_parallel(out, make, results, jobs=jobs, resolution=resolution, spp=spp, quick=quick,
+                              console=console, progress=progress)
             else:
-                make.append((name, key))
-        if jobs > 1 and len(make) > 1:
-            _run_parallel(out, make, results, jobs=jobs, resolution=resolution, spp=spp, quick=quick,
-                          console=console, progress=progress)
-        else:
-            for name, key in make:
-                m = _make(FIGURES[name], key, out, resolution=resolution, spp=spp, quick=quick,
-                          progress=progress)
-                _report(console, name, m)
-                results[name] = m
-    except KeyboardInterrupt:
-        busy = name if jobs <= 1 else ", ".join(n for n, _ in make if n not in results)
-        left = "it is left as it was" if "," not in busy else "they are left as they were"
-        console.print(f"[yellow]interrupted while making {escape(busy)}: {left} before this run; "
-                      f"{len(results)} figures done -> {escape(str(out / 'index.html'))}[/yellow]")
-        raise
-    finally:    # on any exit: index what is done
-        _index_all(out, results)
+                for name, key in make:
+                    m = _make(FIGURES[name], key, out, resolution=resolution, spp=spp, quick=quick,
+                              progress=progress)
+                    _report(console, name, m)
+                    results[name] = m
+        except KeyboardInterrupt:
+            busy = name if jobs <= 1 else ", ".join(n for n, _ in make if n not in results)
+            left = "it is left as it was" if "," not in busy else "they are left as they were"
+            console.print(f"[yellow]interrupted while making {escape(busy)}: {left} before this run; "
+                          f"{len(results)} figures done -> {escape(str(out / 'index.html'))}[/yellow]")
+            raise
+        finally:    # on any exit: index what is done
+            _index_all(out, results)
     results = {n: results[n] for n in todo if n in results}
     total = round(time.time() - t_all, 1)
     failed = [n for n, m in results.items() if m["status"] != "ok"]
@@ -228,23 +230,48 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
 
 # -- worker processes -----------------------------------------------------------------
 
-#: Seconds each figure takes in a default run (2-core machine; from CPU profiles), for the order in
-#: which worker processes take them: the longest first, so that no long figure starts
-#: last.  Only the order depends on these; a figure not listed counts as 5 s, and the
-#: ``seconds`` of a previous run in the output folder take precedence.
-EXPECTED_SECONDS = {"materials-check": 50, "checks": 30, "neumann-fig5": 20, "mitsuba-builtins": 15,
-                    "materials-atlas": 15, "neumann-fig1": 13, "as-convergence": 12, "neumann-fig3": 11,
-                    "neumann-fig8": 11, "as-gold": 9, "as-red-spheres": 9, "as-three-views": 8,
-                    "neumann-perceptual": 8, "notes-cornell": 8, "neumann-fig6": 8, "neumann-fig4": 7,
-                    "as-furnace": 7, "neumann-fig7": 6, "as-lambert-vs-as": 5, "as-cylinder": 4,
-                    "as-half-sphere": 4}
+#: Seconds each figure takes in a default run (2-core machine: its CPU seconds measured one figure after
+#: another in one process, at load 13-15, divided by 2.3, the ratio to the seconds of an idle machine), for
+#: the order in which worker processes take them: the longest first, so that no long figure starts last.
+#: Only the order depends on these; a figure not listed (the lobe figures but one: 0.4-1.6 CPU-s) counts as
+#: 1 s, and the ``seconds`` of a previous run in the output folder take precedence.
+EXPECTED_SECONDS = {"checks": 27, "materials-check": 21, "compensation": 19, "mitsuba-builtins": 8.5,
+                    "as-convergence": 8.5, "notes-cornell": 7.5, "neumann-fig8": 7.5, "materials-atlas": 7,
+                    "as-red-spheres": 6.5, "as-gold": 6, "as-three-views": 6, "neumann-fig5": 5, "neumann-fig1": 5,
+                    "lobe-kulla-conty": 4, "as-lambert-vs-as": 3.7, "neumann-fig3": 3.6, "neumann-perceptual": 3.2,
+                    "as-cylinder": 3.1, "neumann-fig7": 2.9, "as-half-sphere": 2.4, "neumann-fig6": 2.2,
+                    "neumann-fig4": 2.6, "as-furnace": 1.8}
+
+
+#: Figures made right after another one by the same worker process: follower -> leader.  The leader
+#: integrates albedo curves that the follower shows too (fig. 5 holds fig. 3's max pumping once and three
+#: times, fig. 6 fig. 4's), and a process remembers them (:func:`plausible.integrals.albedo.remembering`).
+FOLLOWS = {"neumann-fig3": "neumann-fig5", "neumann-fig4": "neumann-fig6"}
+
+
+def _next(todo, busy, done=None):
+    """Index in ``todo`` (``(name, key)`` pairs, in order) of the figure a worker that has just
+    made ``done`` (or nothing) takes next: a follower of ``done`` (:data:`FOLLOWS`), else the first
+    figure whose leader is neither waiting nor being made (``busy``: the names in progress), else
+    the first.  None when ``todo`` is empty."""
+    if not todo:
+        return None
+    names = [n for n, _ in todo]
+    for i, n in enumerate(names):
+        if done is not None and FOLLOWS.get(n) == done:
+            return i
+    for i, n in enumerate(names):
+        lead = FOLLOWS.get(n)
+        if lead is None or (lead not in names and lead not in busy):
+            return i
+    return 0
 
 
 def _expected_seconds(out: Path, name: str) -> float:
     try:
         return float(json.loads((out / name / "figure.json").read_text())["seconds"])
     except (OSError, ValueError, KeyError, TypeError):
-        return float(EXPECTED_SECONDS.get(name, 5.0))
+        return float(EXPECTED_SECONDS.get(name, 1.0))
 
 
 def _worker(conn, out, resolution, spp, quick):
@@ -269,7 +296,7 @@ def _worker(conn, out, resolution, spp, quick):
 
         return tick
 
-    with reporting(forward):
+    with reporting(forward), remembering():
         for fig, key in iter(conn.recv, None):
             conn.send(("done", _make(fig, key, Path(out), resolution=resolution, spp=spp, quick=quick,
                                      progress=forward)))
@@ -284,7 +311,7 @@ def _run_parallel(out, make, results, *, jobs, resolution, spp, quick, console, 
     """Make the figures ``make`` (``(name, key)`` pairs) in ``jobs`` worker processes
     (spawned: a fresh interpreter each, no Dr.Jit state shared), the longest first
     (:data:`EXPECTED_SECONDS`), each worker given the next figure when it finishes
-    one; fill ``results`` as they finish.  A worker that dies fails the figure it
+    one (a follower of the one it finished first, :data:`FOLLOWS`); fill ``results`` as they finish.  A worker that dies fails the figure it
     was making (its exit code in the error) and is replaced; on any exit the workers
     are ended and the partial folders of unfinished figures removed."""
     import multiprocessing as mp
@@ -304,8 +331,9 @@ def _run_parallel(out, make, results, *, jobs, resolution, spp, quick, console, 
 
     def feed(conn):
         w = workers[conn]
-        if todo:
-            name, key = todo.pop(0)
+        i = _next(todo, {v[1] for c, v in workers.items() if c is not conn and v[1] is not None}, done=w[1])
+        if i is not None:
+            name, key = todo.pop(i)
             w[1] = name
             conn.send((FIGURES[name], key))     # the Figure itself: its function pickles by name
         else:

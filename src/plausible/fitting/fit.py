@@ -22,6 +22,10 @@ specifications with their ranges); the albedo comes from
    the previous optimum).  Every start ends with a bounded Nelder-Mead polish on
    the true figure (L-BFGS-B stalls where a constraint the model enforces by
    ``ValueError`` cuts its line search).  The best point by the true figure wins.
+   A start whose first local optimum (``beta = 20`` for ``perceptual``) repeats an
+   earlier start's (:data:`MERGE_TOL`) stops there.  Each point of L-BFGS-B is
+   evaluated together with its ``n`` forward-difference points, one population
+   of candidates in one launch (:meth:`_Objective.many`).
 4. **Colours**, for a multi-channel target: all parameters are first fitted to
    the channel mean with colours as scalars, then the colour parameters alone
    are refitted per channel with the others fixed.
@@ -104,13 +108,20 @@ class _FastAlbedo:
             g = hemisphere_grid(wi, peaks, m=4, levels=8)
             wo = g.wo.reshape(-1, 3)
             self.grids.append((wi, wo, (g.weight.reshape(-1) * wo[:, 2])))
+        #: every grid's weights end to end, and where each grid starts in them
+        self.weights = np.concatenate([w for _, _, w in self.grids])
+        self.starts = np.cumsum([0] + [len(w) for _, _, w in self.grids[:-1]])
+
+    def sums(self, f):
+        """The albedo of every grid from ``f`` at all the grids' nodes end to end
+        (``(nodes,)`` or ``(nodes, channels)``).  ``np.add.reduceat``, not a dot
+        product: NumPy's BLAS threads, woken by a dot of this size, spin on the
+        cores the Dr.Jit launches need (measured: a fit's CPU time 10x)."""
+        w = self.weights if f.ndim == 1 else self.weights[:, None]
+        return np.add.reduceat(w * f, self.starts, axis=0)
 
     def __call__(self, model):
-        out = []
-        for wi, wo, w in self.grids:
-            f = model.eval(wi, wo)
-            out.append(np.tensordot(w, f, axes=(0, 0)))
-        return np.array(out)
+        return self.sums(np.concatenate([model.eval(wi, wo) for wi, wo, _ in self.grids]))
 
 
 # -- results ---------------------------------------------------------------------------
@@ -295,46 +306,44 @@ def unconstrained(problem, vars_, params) -> list:
 
 
 class _Values:
-    """One evaluation of a candidate model for the objective: ``f`` at the
+    """The evaluation of candidate models for the objective: ``f`` at the
     target's pairs and, with an albedo term, the :class:`_FastAlbedo` sums.
 
-    On Dr.Jit (the backend rule, :func:`plausible.arrays.backend.choose`, on all the
-    pairs and albedo nodes together) every evaluation is one launch of one
-    kernel, :class:`plausible.arrays.backend.PairKernel` over the pairs and the nodes
-    concatenated: the parameters are kernel data, so a whole fit compiles one
-    kernel per model structure.  On NumPy, ``model.eval`` as before; the two
-    agree to the backends' tolerance (``tests/fitting/test_fit.py``)."""
+    One :class:`plausible.arrays.backend.PairKernel` over the pairs and the albedo
+    nodes concatenated, on the backend of the rule
+    (:func:`plausible.arrays.backend.choose` on all of them together): on Dr.Jit
+    every evaluation is one launch of one kernel, the parameters kernel data, so
+    a whole fit compiles one kernel per model structure; on NumPy the hooks run
+    on the validated pairs.  :meth:`many` evaluates a population of candidates
+    (the optimiser's finite-difference points) in one launch or one NumPy pass.
+    The routes agree to 1e-12 (``tests/fitting/test_fit.py``)."""
 
     def __init__(self, tgt: Target, fast: _FastAlbedo | None):
         from ..arrays import backend
         from ..directions import as_directions
 
         self.tgt, self.fast = tgt, fast
-        wi = np.broadcast_to(as_directions("wi", tgt.wi), np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo)))
+        self.shape = np.broadcast_shapes(np.shape(tgt.wi), np.shape(tgt.wo))[:-1]
+        wi = np.broadcast_to(as_directions("wi", tgt.wi), self.shape + (3,))
         pairs = [(wi.reshape(-1, 3), np.broadcast_to(as_directions("wo", tgt.wo), wi.shape).reshape(-1, 3))]
         for gwi, gwo, _ in (fast.grids if fast else ()):
             pairs.append((np.broadcast_to(gwi, gwo.shape), gwo))
-        self.sizes = [len(a) for a, _ in pairs]
-        total = sum(self.sizes)
-        self.kernel = None
-        if backend.choose(total, None) == "drjit":
-            self.kernel = backend.PairKernel(np.concatenate([a for a, _ in pairs]),
-                                             np.concatenate([b for _, b in pairs]))
+        self.n0 = len(pairs[0][0])
+        total = sum(len(a) for a, _ in pairs)
+        self.kernel = backend.PairKernel(np.concatenate([a for a, _ in pairs]),
+                                         np.concatenate([b for _, b in pairs]), backend.choose(total, None))
+
+    def _split(self, f):
+        out = f[:self.n0].reshape(self.shape + f.shape[1:])
+        return out, (self.fast.sums(f[self.n0:]) if self.fast else None)
 
     def __call__(self, m):
         """``(f at the target's pairs, albedo sums or None)``."""
-        if self.kernel is None:
-            return m.eval(self.tgt.wi, self.tgt.wo), (self.fast(m) if self.fast else None)
-        f = self.kernel(m)
-        n0 = self.sizes[0]
-        shape = np.broadcast_shapes(np.shape(self.tgt.wi), np.shape(self.tgt.wo))[:-1] + f.shape[1:]
-        if not self.fast:
-            return f.reshape(shape), None
-        out, s = [], n0
-        for (_, _, w), k in zip(self.fast.grids, self.sizes[1:]):
-            out.append(np.tensordot(w, f[s:s + k], axes=(0, 0)))
-            s += k
-        return f[:n0].reshape(shape), np.array(out)
+        return self._split(self.kernel(m))
+
+    def many(self, models) -> list:
+        """``[self(m) for m in models]`` in one launch (one NumPy pass)."""
+        return [self._split(f) for f in self.kernel.many(models)]
 
 
 @dataclass
@@ -377,7 +386,7 @@ class _Objective:
     (the square of the least-squares figures), and the best point so far is kept
     (``best_x``, ``best_value``).  A parameter set the model rejects costs
     :data:`PENALTY`.  Past the problem's deadline a call raises ``_Timeout`` and
-    sets ``timed_out``; ``evaluations`` counts the calls before it.
+    sets ``timed_out``; ``evaluations`` counts the candidates evaluated before it.
     """
 
     def __init__(self, problem: _Problem, vars_, params0, c=None):
@@ -387,6 +396,9 @@ class _Objective:
         self.evaluations = 0
         self.timed_out = False
         self.best_value, self.best_x = math.inf, None
+        #: ``(step, upper bounds)`` while L-BFGS-B runs (see :meth:`many`), else None
+        self.fd = None
+        self._cache = {}
 
     def model_at(self, x):
         ps = dict(self.params0)
@@ -395,23 +407,63 @@ class _Objective:
         return self.problem.info.cls(**ps)
 
     def __call__(self, x, beta=None):
+        return self.many([x], beta)[0]
+
+    def many(self, xs, beta=None) -> list:
+        """``[self(x, beta) for x in xs]``, the candidates evaluated together
+        (:meth:`_Values.many`: one launch, one NumPy pass), the best point kept in
+        the order of ``xs``.
+
+        While ``fd`` is set (``(step, upper bounds)``, during L-BFGS-B) a single
+        point ``x`` is evaluated together with the forward-difference points
+        L-BFGS-B asks for next (``x + step e_j``, ``x - step e_j`` where that
+        leaves the bounds: SciPy's rule), which wait in a cache for that request;
+        so a point and its gradient are one launch.  ``evaluations`` counts the
+        candidates evaluated."""
         pb = self.problem
         if pb.deadline is not None and time.monotonic() > pb.deadline:
             self.timed_out = True
             raise _Timeout
-        self.evaluations += 1
-        v = self._figure(x, beta)
-        if beta is None and v < self.best_value:
-            self.best_value, self.best_x = v, np.array(x)
-        return v
+        xs = [np.array(x, float) for x in xs]
+        keys = [(beta, x.tobytes()) for x in xs]
+        miss = [x for x, k in zip(xs, keys) if k not in self._cache]
+        if miss:
+            todo = miss + (self._fd_points(miss[0]) if self.fd is not None and len(xs) == 1 else [])
+            vals = self._evaluate(todo, beta)
+            self.evaluations += len(todo)
+            fresh = {(beta, z.tobytes()): v for z, v in zip(todo, vals)}
+            out = [fresh[k] if k in fresh else self._cache[k] for k in keys]
+            self._cache = fresh
+        else:
+            out = [self._cache[k] for k in keys]
+        if beta is None:
+            for x, v in zip(xs, out):
+                if v < self.best_value:
+                    self.best_value, self.best_x = v, x
+        return out
 
-    def _figure(self, x, beta):
+    def _fd_points(self, x):
+        step, ub = self.fd
+        out = []
+        for j in range(len(x)):
+            z = x.copy()
+            z[j] = x[j] + (step if x[j] + step <= ub[j] else -step)
+            out.append(z)
+        return out
+
+    def _evaluate(self, xs, beta) -> list:
+        models = []
+        for x in xs:
+            try:
+                models.append(self.model_at(x))
+            except ValueError:
+                models.append(None)
+        vals = iter(self.problem.values.many([m for m in models if m is not None]))
+        return [PENALTY if m is None else self._value(next(vals), beta) for m in models]
+
+    def _value(self, values, beta):
         pb = self.problem
-        try:
-            m = self.model_at(x)
-        except ValueError:
-            return PENALTY
-        f, alb = pb.values(m)
+        f, alb = values
         cc = _reduce(f, pb.tgt.wo, self.c)
         a = _reduce_alb(alb, self.c) if pb.fast else None
         if beta is None:
@@ -425,35 +477,71 @@ class _Objective:
         return {v.name: v.inv(xi) for v, xi in zip(self.vars, x)}
 
 
+#: Two starts have found the same optimum when their first local optima (L-BFGS-B; for
+#: ``perceptual`` the one at ``beta = 20``) agree to ``MERGE_TOL`` of every variable's
+#: range and their objective values to ``MERGE_RTOL`` relative: the later start stops
+#: there (its further steps would repeat the earlier start's to rounding).
+MERGE_TOL, MERGE_RTOL = 1e-4, 1e-8
+#: Forward-difference step of L-BFGS-B's gradients (in the variables).
+FD_STEP = 1e-7
+
+
+def _lbfgsb(fun: _Objective, x, beta, bounds, **options):
+    """L-BFGS-B from ``x`` on ``fun`` at ``beta``, each point evaluated together
+    with its finite-difference points (:meth:`_Objective.many`)."""
+    from scipy.optimize import minimize
+
+    fun.fd = (FD_STEP, np.array([hi for _, hi in bounds], float))
+    try:
+        return minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
+                        options=dict(eps=FD_STEP, **options))
+    finally:
+        fun.fd = None
+
+
+def _same_optimum(found, x, value, spans) -> bool:
+    """Whether ``(x, value)`` repeats one of the first optima ``found`` (see :data:`MERGE_TOL`)."""
+    return any(np.all(np.abs(x - y) <= MERGE_TOL * spans) and abs(value - w) <= MERGE_RTOL * max(abs(w), 1e-300)
+               for y, w in found)
+
+
 def _optimise(fun: _Objective, x0s, tick) -> dict:
     """Step 3 from each start in ``x0s``: L-BFGS-B (on the smooth bounds at
     ``beta = 20, 200, 2000`` for ``perceptual``), then a bounded Nelder-Mead
-    polish on the true figure; ``tick()`` after each start; stop at the deadline.
-    Returns the best point's parameter values."""
+    polish on the true figure; a start whose first optimum repeats an earlier
+    start's stops there (:data:`MERGE_TOL`); ``tick()`` after each start; stop at
+    the deadline.  Returns the best point's parameter values."""
     from scipy.optimize import minimize
 
     bounds = [v.bounds for v in fun.vars]
+    spans = np.array([hi - lo for lo, hi in bounds], float)
     maxiter = fun.problem.maxiter
+    found = []
     for x0 in x0s:
         try:
             x = np.array(x0, float)
             if fun.problem.metric == "perceptual":
                 for beta in (20.0, 200.0, 2000.0):
-                    r = minimize(lambda z: fun(z, beta), x, method="L-BFGS-B", bounds=bounds,
-                                 options=dict(maxiter=maxiter, eps=1e-7))
+                    r = _lbfgsb(fun, x, beta, bounds, maxiter=maxiter)
                     x = r.x
                     fun(x)
-                # derivative-free polish on the true figure (slides along constraints)
-                minimize(fun, x, method="Nelder-Mead", bounds=bounds,
-                         options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
+                    if beta == 20.0:
+                        if _same_optimum(found, x, float(r.fun), spans):
+                            break
+                        found.append((x, float(r.fun)))
+                else:
+                    # derivative-free polish on the true figure (slides along constraints)
+                    minimize(fun, x, method="Nelder-Mead", bounds=bounds,
+                             options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
             else:
-                r = minimize(fun, x, method="L-BFGS-B", bounds=bounds,
-                             options=dict(maxiter=maxiter, eps=1e-7, ftol=1e-14, gtol=1e-10))
+                r = _lbfgsb(fun, x, None, bounds, maxiter=maxiter, ftol=1e-14, gtol=1e-10)
                 fun(r.x)
-                # derivative-free polish: L-BFGS-B stops where a constraint the model
-                # enforces by ValueError (kd + ks <= 1) cuts its line search
-                minimize(fun, fun.best_x, method="Nelder-Mead", bounds=bounds,
-                         options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
+                if not _same_optimum(found, r.x, float(r.fun), spans):
+                    found.append((r.x, float(r.fun)))
+                    # derivative-free polish: L-BFGS-B stops where a constraint the model
+                    # enforces by ValueError (kd + ks <= 1) cuts its line search
+                    minimize(fun, fun.best_x, method="Nelder-Mead", bounds=bounds,
+                             options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
         except _Timeout:
             pass
         tick()

@@ -18,6 +18,7 @@ therefore guards every albedo with the model's own sampler.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -354,14 +355,107 @@ def _check_tol(tol):
     return float(tol)
 
 
+# -- remembered integrals (the figures) -------------------------------------------------
+
+#: The integrals remembered while :func:`remembering` is active (else None):
+#: ``(model text, kind, tol, levels, incidence) -> AlbedoResult``.
+_MEMORY: dict | None = None
+
+
+@contextmanager
+def remembering():
+    """Within this block, every integral of :func:`albedo`, :func:`albedos`,
+    :func:`pdf_integral` and :func:`pdf_integrals` is remembered in this process and
+    not computed again when asked again for the same model (its exact text,
+    :func:`memo_key`), incidence, ``tol`` and ``levels``: the same albedo in two
+    figures made by one process, or twice in one figure.  The result is the one the
+    first call computed (each incidence is refined on its own, so it is the value a
+    second computation gives, up to the rounding of a launch's sums).  Off by default:
+    a caller that compares two computations (backends, a cache) must compute both.
+    Used by ``plausible figures``; nested blocks share the outermost memory."""
+    global _MEMORY
+    outer = _MEMORY
+    if outer is None:
+        _MEMORY = {}
+    try:
+        yield _MEMORY
+    finally:
+        if outer is None:
+            _MEMORY = None
+
+
+def memo_key(model) -> str | None:
+    """The exact text of ``model`` for :func:`remembering`, or None when it has none
+    (then nothing is remembered for it): a model that names itself (``cache_key()``, a
+    foreign BSDF held as a model), a sum its parts and scales, any other
+    :class:`~plausible.bxdf.BxDF` its class and every parameter at full precision
+    (floats by ``repr``, nested models alike).  Never ``repr(model)`` or its 6
+    significant digits; a parameter of another type makes the text None."""
+    key = getattr(model, "cache_key", None)
+    if callable(key):
+        return f"key:{key()}"
+    if not isinstance(model, BxDF):
+        return None
+    if hasattr(model, "parts") and hasattr(model, "scales"):
+        parts = [memo_key(m) for m in model.parts] + [_exact_value(x) for x in model.scales]
+        return None if None in parts else "sum(" + ", ".join(parts) + ")"
+    params = getattr(model, "params", None)
+    if not isinstance(params, dict):
+        return None
+    vals = [_exact_value(v) for v in params.values()]
+    if None in vals:
+        return None
+    return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
+        f"{k}={v}" for k, v in zip(params, vals)) + ")"
+
+
+def _exact_value(v) -> str | None:
+    if v is None or isinstance(v, (bool, str)):
+        return repr(v)
+    if isinstance(v, (int, np.integer)):
+        return repr(int(v))
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
+    if isinstance(v, np.ndarray) and v.dtype.kind in "biuf":
+        return f"array{v.shape}" + repr(v.astype(np.float64).ravel().tolist())
+    if isinstance(v, (tuple, list)):
+        parts = [_exact_value(x) for x in v]
+        return None if None in parts else "(" + ", ".join(parts) + ")"
+    if isinstance(v, BxDF):
+        k = memo_key(v)
+        return None if k is None else f"[{k}]"
+    return None
+
+
+def _copy(r: AlbedoResult) -> AlbedoResult:
+    """A remembered result handed out: its arrays copied (a caller may change them in place)."""
+    if np.ndim(r.value) == 0:
+        return r
+    return AlbedoResult(np.array(r.value, dtype=np.float64), np.array(r.error, dtype=np.float64))
+
+
 def _results(model, kind, wis, tol, levels):
-    """:func:`_integrate` for any incidences (zero below the horizon), as results."""
+    """:func:`_integrate` for any incidences (zero below the horizon), as results
+    (remembered within :func:`remembering`)."""
     zero = np.zeros(model.channels) if (kind == "f" and model.channels) else 0.0
-    up = [k for k, w in enumerate(wis) if w[2] > 0]
-    vals, errs = _integrate(model, kind, [wis[k] for k in up], tol, levels) if up else ([], [])
+    memory = _MEMORY
+    mk = memo_key(model) if memory is not None else None
     out = [AlbedoResult(zero, zero)] * len(wis)
+    up, keys = [], {}
+    for k, w in enumerate(wis):
+        if w[2] <= 0:
+            continue
+        if mk is not None:
+            keys[k] = (mk, kind, float(tol), int(levels), tuple(float(x) for x in w))
+            if keys[k] in memory:
+                out[k] = _copy(memory[keys[k]])
+                continue
+        up.append(k)
+    vals, errs = _integrate(model, kind, [wis[k] for k in up], tol, levels) if up else ([], [])
     for k, v, e in zip(up, vals, errs):
         out[k] = AlbedoResult(float(v), float(e)) if np.ndim(v) == 0 else AlbedoResult(v, e)
+        if mk is not None:
+            memory[keys[k]] = _copy(out[k])
     return out
 
 
