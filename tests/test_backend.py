@@ -89,16 +89,6 @@ def test_auto_picks_drjit_for_large_batches_only():
     # new parameter values of a compiled structure reuse its kernel; a new structure does not
     assert backend.choose(backend.AUTO_MIN_ROWS, Fresh(nu=12.345, nv=67.9)) == "drjit"
     assert backend.choose(backend.AUTO_MIN_ROWS, Fresh(rs=[0.1, 0.2, 0.3])) == "numpy"
-    # smaller calls of a new structure compile it once they have asked for AUTO_MIN_NEW rows
-    # together (2^18 / 2^15 = 8 calls); calls below AUTO_MIN_ROWS do not count
-    class Fresh2(Fresh):
-        pass
-
-    k = backend.AUTO_MIN_NEW // backend.AUTO_MIN_ROWS
-    assert [backend.choose(backend.AUTO_MIN_ROWS - 1, Fresh2(), kernel="pdf") for _ in range(2 * k)] == \
-        ["numpy"] * (2 * k)
-    assert [backend.choose(backend.AUTO_MIN_ROWS, Fresh2(), kernel="pdf") for _ in range(k + 1)] == \
-        ["numpy"] * (k - 1) + ["drjit"] * 2
     with backend.use("numpy"):
         assert backend.choose(10 ** 7) == "numpy"
     with backend.use("drjit"):

@@ -24,9 +24,8 @@ The rule (see ``docs/backends.md``):
 2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
    and the call has at least :data:`AUTO_MIN_ROWS` direction pairs
    (:data:`AUTO_MIN_NODES` quadrature nodes; :data:`AUTO_MIN_NEW` for a model
-   structure not yet compiled in this process, in one call or in the calls of
-   at least those sizes together; below that, tracing and compiling cost more
-   than NumPy's arithmetic), NumPy otherwise;
+   structure not yet compiled in this process; below that, tracing and
+   compiling cost more than NumPy's arithmetic), NumPy otherwise;
 3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
 4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
    directly, such as a measured MERL table) runs on NumPy whatever was asked:
@@ -74,9 +73,6 @@ AUTO_MIN_NEW = 1 << 18
 _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
 #: ``(kernel, kernel_key(model))`` of the models ``auto`` has sent to Dr.Jit (compiled).
 _TRACED: set = set()
-#: Rows asked of each ``(kernel, kernel_key(model))`` not yet in :data:`_TRACED`, by
-#: calls of at least the kernel's minimum (:func:`choose`).
-_ASKED: dict = {}
 #: Models whose hooks failed on Dr.Jit (they run on NumPy from then on).
 _NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
 #: Structure keys (:func:`plausible.kernel_params.structure`) whose hooks failed
@@ -154,13 +150,8 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
                              f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
         return "drjit"
     key = None if model is None else (kernel, kernel_key(model))
-    if key is not None and key not in _TRACED and rows >= min_rows:
-        # a kernel not yet compiled: worth it for one call of AUTO_MIN_NEW rows, or once
-        # the calls large enough for a compiled kernel have asked for that many together
-        # (a check's 20,000-sample blocks, repeated for each parameter set)
-        asked = _ASKED.get(key, 0) + rows
-        _ASKED[key] = asked
-        min_rows = max(min_rows, AUTO_MIN_NEW - asked + rows)
+    if key is not None and key not in _TRACED:
+        min_rows = max(min_rows, AUTO_MIN_NEW)
     if rows >= min_rows and drjit_available():
         if key is not None:
             _TRACED.add(key)
