@@ -661,7 +661,9 @@ def convert_cmd(source, to, out, metric, as_json):
               help="Worker processes (0: one conversion after another in this process).")
 @click.option("--markdown", "md", type=click.Path(dir_okay=False), metavar="FILE.md",
               help="Write the table (summary per fit set, every row) from every row of --out.")
-def convert_table_cmd(out, to, fits, per_set, limit, workers, md):
+@click.option("--redo-target", "redo", metavar="A,B",
+              help="Convert again first the rows of these targets (mitsuba:diffuse, ...) made by other code.")
+def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
     """Convert every published fit (material:NAME@FIT) to each target, resumably (docs/convert.md).
 
     Round robin over the fit sets; interrupt at any time and run the same command
@@ -689,7 +691,7 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md):
 
     try:
         rows = table.run_table(out, targets, per_set=per_set, fits=fits_, limit=limit, workers=workers,
-                               on_row=on_row)
+                               on_row=on_row, redo=[t.strip() for t in (redo or "").split(",") if t.strip()])
     except KeyboardInterrupt:
         console.print(f"[yellow]interrupted[/yellow]: the finished rows are in {escape(out)}; "
                       "run the same command again to resume", soft_wrap=True)

@@ -1,6 +1,8 @@
 """Which Mitsuba families a source is fitted with (``plausible.conversion.mitsuba.candidates``):
-by the albedo its lobes declare diffuse and the rest, at normal incidence (no Mitsuba needed)."""
+by the albedo its lobes declare diffuse and the rest, at normal incidence and over the incidences
+(a Fresnel rise; no Mitsuba needed)."""
 
+import numpy as np
 import pytest
 
 import plausible
@@ -19,3 +21,24 @@ def test_the_candidate_families_follow_the_declared_diffuse_and_specular_albedos
 
     m = read_sources(spec)[0].model
     assert candidates(m, plausible.albedo(m, [0, 0, 1]).value)[0] == families
+
+
+@pytest.mark.parametrize("spec, families", [
+    # Schlick's Fresnel of a dielectric, no diffuse: the albedo rises (0.05 to 0.2 at 80 degrees)
+    ("cook-torrance:m=0.05:fresnel=schlick:rs=0.05", ["roughconductor", "roughplastic", "principled"]),
+    # the same lobe without Fresnel stays flat: roughconductor alone
+    ("cook-torrance:m=0.05:fresnel=none:rs=0.5", ["roughconductor"]),
+    # a specular part below 0.01 at normal incidence that rises at grazing: not a diffuse alone
+    ("lambertian:rd=0.3 + cook-torrance:m=0.2:fresnel=schlick:rs=0.004",
+     ["diffuse", "blendbsdf", "roughplastic", "principled"]),
+])
+def test_a_fresnel_rise_over_the_incidences_adds_the_families_with_fresnel(spec, families):
+    from plausible.analysis import albedo_curve
+    from plausible.conversion import CONSERVE_THETAS
+    from plausible.conversion.mitsuba import RISE, candidates
+
+    m = read_sources(spec)[0].model
+    a = np.asarray(albedo_curve(m, thetas_deg=CONSERVE_THETAS).value).reshape(len(CONSERVE_THETAS), -1)
+    assert candidates(m, a)[0] == families
+    # at normal incidence alone the rise is unseen (what the rule was before)
+    assert (float(np.max(a - a[0])) > RISE) == (candidates(m, a[0])[0] != families)

@@ -89,3 +89,19 @@ def test_worker_processes_write_every_row_once(tmp_path, monkeypatch):
     rows = table.run_table(path, ("mitsuba", "gltf"), per_set=2, fits=["ngan2005/ward"], workers=2)
     assert len(rows) == 4 and len(path.read_text().splitlines()) == 4
     assert set(rows) == {table.key(j) for j in table.jobs(("mitsuba", "gltf"), 2, ["ngan2005/ward"])}
+
+
+def test_rows_of_a_redone_target_made_by_other_code_are_converted_again_first(tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(table, "convert_row", lambda job: calls.append(job) or {**_fake_row(job), "code": "new"})
+    monkeypatch.setattr(table, "code_version", lambda: "new")
+    path = tmp_path / "t.jsonl"
+    old = [_fake_row(j) for j in table.jobs(("mitsuba",), 2, ["ngan2005/ward"])]
+    old[1]["target"] = "mitsuba:diffuse"
+    path.write_text("".join(json.dumps(r) + "\n" for r in old))
+    rows = table.run_table(path, ("mitsuba",), per_set=3, fits=["ngan2005/ward"], redo=["mitsuba:diffuse"])
+    # first the redone row, then the one new job (the third material)
+    assert calls == [table.jobs(("mitsuba",), 2, ["ngan2005/ward"])[1], table.jobs(("mitsuba",), 3, ["ngan2005/ward"])[2]]
+    assert rows[table.key(old[1])]["code"] == "new" and len(rows) == 3
+    table.run_table(path, ("mitsuba",), per_set=3, fits=["ngan2005/ward"], redo=["mitsuba:diffuse"])
+    assert len(calls) == 2        # the redone row is this code's: not again

@@ -7,7 +7,7 @@ Mitsuba plugin and the fitting read it, it imports none of them.
 """
 
 from .fit_sets import (DEFAULT_FIT, FIT_SETS, LOW, NGAN, SOURCE, FitSet, Sum, Term, build_term, fit_data, fit_set, fits,
-                   from_spec, material, materials, parse_line, parse_spec, suggest, terms)
+                   from_spec, material, materials, parse_line, parse_spec, spec, suggest, terms)
 
 __all__ = ["DEFAULT_FIT", "FIT_SETS", "FitSet", "LOW", "NGAN", "SOURCE", "Term", "build_term", "fit_data", "fit_set",
-           "fits", "from_spec", "material", "materials", "parse_line", "parse_spec", "suggest", "terms"]
+           "fits", "from_spec", "material", "materials", "parse_line", "parse_spec", "spec", "suggest", "terms"]

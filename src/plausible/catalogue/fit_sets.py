@@ -359,10 +359,15 @@ def parse_spec(spec: str) -> tuple[str, str]:
     return name.strip(), (fit.strip() or DEFAULT_FIT)
 
 
+def spec(name: str, fit: str = DEFAULT_FIT) -> str:
+    """``"material:NAME@FIT"``, the spec that :func:`parse_spec` reads back."""
+    return f"material:{name}@{fit}"
+
+
 def from_spec(spec: str) -> Sum:
     """:func:`material` of ``"material:NAME@FIT"`` (see :func:`parse_spec`)."""
     return material(*parse_spec(spec))
 
 
 __all__ = ["DEFAULT_FIT", "FIT_SETS", "FitSet", "Term", "build_term", "fit_data", "fit_set", "fits",
-           "from_spec", "material", "materials", "parse_line", "parse_spec", "terms"]
+           "from_spec", "material", "materials", "parse_line", "parse_spec", "spec", "terms"]

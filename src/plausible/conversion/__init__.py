@@ -304,7 +304,7 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     # the source's albedo at the probe's incidences: computed once, with the report's (CONSERVE_THETAS)
     target = CM.source_target(src.model, probe, src_alb[[CONSERVE_THETAS.index(t) for t in CM.PROBE_THETAS]])
     if family is None:
-        families, why = CM.candidates(src.model, src_alb[0])
+        families, why = CM.candidates(src.model, src_alb)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
         family = r.family

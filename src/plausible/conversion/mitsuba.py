@@ -474,27 +474,51 @@ def diffuse_albedo(model) -> np.ndarray:
     return total
 
 
-def candidates(model, albedo0) -> tuple[list, str]:
-    """``(families, reason)``: the families fitted to ``model`` (albedo ``albedo0`` at
-    normal incidence, three channels), of which the one of the lowest minimised
-    figure is kept.  With ``D`` the declared diffuse albedo and ``S = albedo0 - D``:
-    ``diffuse`` alone when ``S < 0.01``; ``roughconductor`` alone when ``D < 0.01``;
-    else ``diffuse``, ``blendbsdf`` (a diffuse and a ``roughconductor`` without
-    Fresnel, the composition of the published fits), ``roughplastic`` when ``S <= 0.04`` and grey (channels within
-    10 %), and ``principled``; ``principled`` for a source that declares no lobes."""
+#: A source whose albedo rises by more than this (any channel) from normal incidence to
+#: the largest probed incidence has a Fresnel-like rise that a family without Fresnel
+#: (``diffuse``, ``roughconductor``) cannot follow.
+RISE = 0.025
+
+
+def candidates(model, albedo) -> tuple[list, str]:
+    """``(families, reason)``: the families fitted to ``model``, of which the one of the lowest
+    minimised figure is kept.  ``albedo``: the source's albedo, three channels, at normal
+    incidence (shape (3,)) or at the incidences of :data:`plausible.conversion.CONSERVE_THETAS`
+    from normal incidence on (shape (T, 3)).  With ``D`` the declared diffuse albedo and
+    ``S = albedo - D`` at each incidence: ``diffuse`` alone when ``S < 0.01`` at every
+    incidence; when ``D < 0.01``, ``roughconductor``, and also ``roughplastic`` and
+    ``principled`` (which have a dielectric Fresnel) when the albedo rises by more than
+    :data:`RISE` from normal incidence; else ``diffuse``, ``blendbsdf`` (a diffuse and a
+    ``roughconductor`` without Fresnel, the composition of the published fits), ``roughplastic``
+    when ``S <= 0.04`` at normal incidence and grey (channels within 10 %) or the albedo rises,
+    and ``principled``; ``principled`` for a source that declares no lobes.  (Decided at normal
+    incidence alone, a published fit with a dielectric Fresnel, ``chrome@low2012/cook-torrance-e2``,
+    albedo 0.082 at 0 degrees and 0.287 at 75, was given ``roughconductor`` alone and missed by 0.10
+    at both ends; ``colonial-maple-223@ngan2005/cook-torrance``, a specular 0.002 at normal incidence
+    rising at grazing, ``diffuse`` alone, 0.10 off.)"""
     D = diffuse_albedo(model)
-    a0 = np.broadcast_to(np.asarray(albedo0, float), (3,))
+    a = np.asarray(albedo, float)
+    a = a.reshape(1, -1) if a.ndim <= 1 else a
+    a = np.broadcast_to(a, (a.shape[0], 3))
     if not np.all(np.isfinite(D)) or not hasattr(model, "components"):
         return ["principled"], "the source declares no diffuse/glossy lobes: the most general family"
-    S = np.maximum(a0 - D, 0.0)
+    S = np.maximum(a - D, 0.0)
+    S0 = S[0]
+    rise = float(np.max(a - a[0]))
+    rising = rise > RISE
     if S.max() < NONE_BELOW:
         return ["diffuse"], f"no specular part (albedo {S.max():.3g} beside a diffuse {D.max():.3g})"
     if D.max() < NONE_BELOW:
-        return ["roughconductor"], f"no diffuse part (specular albedo {S.max():.3g})"
-    plastic = S.max() <= PLASTIC_SPECULAR and S.max() <= 1.1 * S.min() + 1e-3
+        if rising:
+            return (["roughconductor", "roughplastic", "principled"],
+                    f"no diffuse part (specular albedo {S0.max():.3g}), an albedo rising by {rise:.3g} (Fresnel)")
+        return ["roughconductor"], f"no diffuse part (specular albedo {S0.max():.3g})"
+    plastic = (S0.max() <= PLASTIC_SPECULAR and S0.max() <= 1.1 * S0.min() + 1e-3) or rising
     return (["diffuse", "blendbsdf"] + (["roughplastic"] if plastic else []) + ["principled"],
-            f"a diffuse part ({D.max():.3g}) and a specular one ({S.max():.3g})"
-            + (" within a plastic's coat" if plastic else ""))
+            f"a diffuse part ({D.max():.3g}) and a specular one ({S0.max():.3g} at normal incidence"
+            + (f", {S.max():.3g} at most" if S.max() > S0.max() + 1e-3 else "") + ")"
+            + (f", an albedo rising by {rise:.3g}" if rising else "")
+            + (" within a plastic's coat" if plastic and not rising else ""))
 
 
 # -- Mitsuba's own sampler ------------------------------------------------------------------------

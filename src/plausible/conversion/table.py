@@ -53,10 +53,12 @@ def jobs(targets=TARGETS, per_set: int | None = None, fits=None) -> list[tuple]:
 
 def key(row_or_job) -> str:
     """The row's identity: ``"TO material:NAME@FIT"``."""
+    from .. import catalogue
+
     if isinstance(row_or_job, dict):
-        return f"{row_or_job['to']} material:{row_or_job['material']}@{row_or_job['fit']}"
+        return f"{row_or_job['to']} {catalogue.spec(row_or_job['material'], row_or_job['fit'])}"
     to, fit, name = row_or_job
-    return f"{to} material:{name}@{fit}"
+    return f"{to} {catalogue.spec(name, fit)}"
 
 
 @lru_cache(maxsize=None)
@@ -75,11 +77,12 @@ def code_version() -> str | None:
 def convert_row(job) -> dict:
     """One row: the conversion of ``job = (to, fit, material)``, its figures, and the
     commit of the code (:func:`code_version`)."""
+    from .. import catalogue
     from . import convert
 
     to, fit, name = job
     t0 = time.monotonic()
-    c = convert(f"material:{name}@{fit}", to=to).items[0]
+    c = convert(catalogue.spec(name, fit), to=to).items[0]
     diffs = [c.albedo[k]["max_abs_difference"] for k in ("0", "45", "75")]
     return dict(to=to, fit=fit, material=name, target=c.target, perceptual=c.errors["perceptual"],
                 l2=c.errors["l2-cos"], log=c.errors["log"], albedo_diff=diffs,
@@ -128,16 +131,21 @@ def _guarded(job):
 
 
 def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, limit: int | None = None,
-              workers: int = 0, on_row=None) -> dict:
+              workers: int = 0, on_row=None, redo=()) -> dict:
     """Convert the :func:`jobs` not yet in ``path`` and append each row as it finishes.
 
     ``workers``: 0 runs them one after another in this process; ``n >= 1`` in ``n``
     worker processes.  ``limit``: at most this many conversions this run.
+    ``redo``: targets (``"mitsuba:diffuse"``, ...) whose rows made by other code than this
+    (:func:`code_version`) are converted again first (the new row replaces the old one).
     ``on_row(row)`` is called after each row is written.  Returns every row of ``path``."""
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
     done = read_rows(path)
-    todo = [j for j in jobs(targets, per_set, fits) if key(j) not in done]
+    redo = set(redo)
+    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and done[key(j)].get("target") in redo
+             and done[key(j)].get("code") != code_version()]
+    todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
     if limit is not None:
         todo = todo[:max(0, int(limit))]
     Path(path).parent.mkdir(parents=True, exist_ok=True)
