@@ -29,6 +29,7 @@ from ..bxdf import BxDF
 from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
+from .keys import exact_text
 from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
 
 
@@ -367,7 +368,7 @@ def remembering():
     """Within this block, every integral of :func:`albedo`, :func:`albedos`,
     :func:`pdf_integral` and :func:`pdf_integrals` is remembered in this process and
     not computed again when asked again for the same model (its exact text,
-    :func:`memo_key`), incidence, ``tol`` and ``levels``: the same albedo in two
+    :func:`.keys.exact_text`), incidence, ``tol`` and ``levels``: the same albedo in two
     figures made by one process, or twice in one figure.  The result is the one the
     first call computed (each incidence is refined on its own, so it is the value a
     second computation gives, up to the rounding of a launch's sums).  Off by default:
@@ -384,49 +385,6 @@ def remembering():
             _MEMORY = None
 
 
-def memo_key(model) -> str | None:
-    """The exact text of ``model`` for :func:`remembering`, or None when it has none
-    (then nothing is remembered for it): a model that names itself (``cache_key()``, a
-    foreign BSDF held as a model), a sum its parts and scales, any other
-    :class:`~plausible.bxdf.BxDF` its class and every parameter at full precision
-    (floats by ``repr``, nested models alike).  Never ``repr(model)`` or its 6
-    significant digits; a parameter of another type makes the text None."""
-    key = getattr(model, "cache_key", None)
-    if callable(key):
-        return f"key:{key()}"
-    if not isinstance(model, BxDF):
-        return None
-    if hasattr(model, "parts") and hasattr(model, "scales"):
-        parts = [memo_key(m) for m in model.parts] + [_exact_value(x) for x in model.scales]
-        return None if None in parts else "sum(" + ", ".join(parts) + ")"
-    params = getattr(model, "params", None)
-    if not isinstance(params, dict):
-        return None
-    vals = [_exact_value(v) for v in params.values()]
-    if None in vals:
-        return None
-    return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
-        f"{k}={v}" for k, v in zip(params, vals)) + ")"
-
-
-def _exact_value(v) -> str | None:
-    if v is None or isinstance(v, (bool, str)):
-        return repr(v)
-    if isinstance(v, (int, np.integer)):
-        return repr(int(v))
-    if isinstance(v, (float, np.floating)):
-        return repr(float(v))
-    if isinstance(v, np.ndarray) and v.dtype.kind in "biuf":
-        return f"array{v.shape}" + repr(v.astype(np.float64).ravel().tolist())
-    if isinstance(v, (tuple, list)):
-        parts = [_exact_value(x) for x in v]
-        return None if None in parts else "(" + ", ".join(parts) + ")"
-    if isinstance(v, BxDF):
-        k = memo_key(v)
-        return None if k is None else f"[{k}]"
-    return None
-
-
 def _copy(r: AlbedoResult) -> AlbedoResult:
     """A remembered result handed out: its arrays copied (a caller may change them in place)."""
     if np.ndim(r.value) == 0:
@@ -439,7 +397,7 @@ def _results(model, kind, wis, tol, levels):
     (remembered within :func:`remembering`)."""
     zero = np.zeros(model.channels) if (kind == "f" and model.channels) else 0.0
     memory = _MEMORY
-    mk = memo_key(model) if memory is not None else None
+    mk = exact_text(model) if memory is not None else None
     out = [AlbedoResult(zero, zero)] * len(wis)
     up, keys = [], {}
     for k, w in enumerate(wis):
