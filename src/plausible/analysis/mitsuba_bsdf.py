@@ -248,6 +248,8 @@ class MitsubaBSDF(ForeignBxDF):
         return np.asarray(self.bsdf.pdf(self._ctx(), self._si(wi), self._vec(wo)).numpy(), dtype=np.float64)
 
     # -- the contract --------------------------------------------------------------------------
+    _reads_rows_only = True   # _local converts the rows to float32 (a copy)
+
     def _directions(self, name, w):
         return _as_float32_directions(name, w)
 
