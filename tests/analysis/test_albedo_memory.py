@@ -9,6 +9,7 @@ import pytest
 import plausible
 from plausible.analysis import albedo, albedos, direction
 from plausible.integrals import albedo as A
+from plausible.integrals.keys import exact_text
 from plausible.models.sum import Sum
 
 
@@ -57,15 +58,15 @@ def test_different_models_tolerances_and_kinds_never_share(monkeypatch):
     assert float(a.value) != float(b.value)
 
 
-def test_memo_key_is_exact_or_none():
-    k1 = A.memo_key(plausible.make("ward", alpha_x=0.1, alpha_y=0.1000000001))
-    k2 = A.memo_key(plausible.make("ward", alpha_x=0.1, alpha_y=0.1))
+def test_the_memory_key_is_exact_or_none():
+    k1 = exact_text(plausible.make("ward", alpha_x=0.1, alpha_y=0.1000000001))
+    k2 = exact_text(plausible.make("ward", alpha_x=0.1, alpha_y=0.1))
     assert k1 is not None and k2 is not None and k1 != k2
     s1 = Sum([plausible.make("lambertian", rd=0.2), (plausible.make("phong", ks=0.5, n=10), np.array([1.0, 0.5, 0.25]))])
     s2 = Sum([plausible.make("lambertian", rd=0.2), (plausible.make("phong", ks=0.5, n=10), np.array([1.0, 0.5, 0.2500001]))])
-    assert A.memo_key(s1) != A.memo_key(s2)
+    assert exact_text(s1) != exact_text(s2)
     # an object with the contract but no parameters that name it: nothing remembered
-    assert A.memo_key(object()) is None
+    assert exact_text(object()) is None
 
 
 def test_a_colour_result_handed_out_is_a_copy():

@@ -32,6 +32,19 @@ def test_pumped_up_tables_of_nearby_exponents_are_not_shared():
     assert spec_of(plausible.make("pumped-up", base=a)) != spec_of(plausible.make("pumped-up", base=b))
 
 
+def test_tables_of_unregistered_subclasses_are_not_shared_between_nearby_parameters():
+    # CookTorranceWide (the published Cook-Torrance fits) inherits cook-torrance's registry entry but
+    # is not its class: its spec() is its repr, 6 digits, so m=0.1234567 and 0.1234568 read one table
+    from plausible.integrals.cache import spec_of
+    from plausible.models.published import CookTorranceWide
+
+    a, b = CookTorranceWide(m=0.1234567), CookTorranceWide(m=0.1234568)
+    assert repr(a) == repr(b) and spec_of(a) != spec_of(b)
+    assert spec_of(a) == spec_of(CookTorranceWide(m=0.1234567))          # a key, not a fresh name per object
+    assert "0.1234567" in spec_of(a) and "CookTorranceWide" in spec_of(a)   # not cook-torrance's own key
+    assert spec_of(a) != spec_of(plausible.make("cook-torrance", m=0.1234567))
+
+
 def test_lafortune_pdf_of_a_subnormal_lobe_is_the_same_on_both_backends():
     # rho |C wi|^n = 1e-10 * 0.1^300 = 1e-310, a float64 subnormal: Dr.Jit flushed it to zero
     # (pdf 0, every sample lost) while NumPy kept it; the mixture is normalised by its largest weight

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..bxdf import Sample
 from ..progress import start
 from ..text import jsonable
 from ..integrals.albedo import albedos, direction, is_isotropic, pdf_integrals
@@ -119,7 +120,7 @@ def guard_albedos(model, wis, n: int = GUARD_SAMPLES, seed: int = 11):
 
 
 def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
-           guard: bool | None = None, progress=None) -> PropertyResult:
+           guard: bool | None = None, progress=None, results=None) -> PropertyResult:
     """Max directional albedo over a grid of incidence directions (azimuths too
     for anisotropic models), by default from the normal to ``cos(theta) = 1e-9``;
     passes when ``max a <= 1 + tol``.  ``tol`` matches the
@@ -135,11 +136,14 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     (``passed`` False, ``unresolved`` True) where an unresolved incidence could
     exceed ``1 + tol`` by either estimate; else passes.  So a lobe the quadrature
     cannot resolve is reported as such, not as energy gained.
-    ``progress``: a :mod:`plausible.progress` factory, ticked per direction."""
+    ``progress``: a :mod:`plausible.progress` factory, ticked per direction.
+    ``results``: the albedos (:func:`~plausible.integrals.albedo.albedos`) of the
+    directions of :func:`energy_directions`, if the caller computed them
+    (:func:`plausible.check` does, together with the sampling check's)."""
     dirs = energy_directions(model, thetas_deg, phis_deg)
     tick = start(progress, len(dirs), f"energy {model.name}")
     wis = [direction(math.radians(t), math.radians(p)) for t, p in dirs]
-    res = albedos(model, wis)
+    res = albedos(model, wis) if results is None else list(results)
     if guard is None:
         guard = callable(getattr(model, "sample", None)) and "sampling" not in getattr(model, "not_applicable", {})
     mcs = guard_albedos(model, wis) if guard else (np.full(len(wis), np.nan), np.full(len(wis), np.nan))
@@ -183,7 +187,7 @@ SAMPLING_FIGURES = ("weight_rel_err", "pdf_rel_err", "max_pdf_integral", "max_in
 
 def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 45),
                          n_samples: int = 50_000, seed: int = 3, tol: float = 1e-6,
-                         sigmas: float = 5.0, progress=None) -> PropertyResult:
+                         sigmas: float = 5.0, progress=None, integrals=None) -> PropertyResult:
     """Agreement of ``sample`` with ``eval`` and ``pdf`` at several incidences:
 
     * ``weight == eval * cos / pdf`` (max relative error),
@@ -197,6 +201,9 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
     ``details`` holds each figure of :data:`SAMPLING_FIGURES` (the maximum over
     the incidences), ``worst`` where each was reached and the first problems.
     ``progress``: a :mod:`plausible.progress` factory, ticked per incidence.
+    ``integrals``: the ``(pdf integral, albedo)`` pairs of the incidences (phi outer,
+    theta inner), if the caller computed them (:func:`plausible.check` does, with
+    the energy check's albedos); else they are computed here.
     """
     rng = np.random.default_rng(seed)
     if is_isotropic(model):
@@ -207,12 +214,16 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
     problems = []
     # the deterministic integrals (pdf, albedo) of every incidence, refined together
     wis = [direction(math.radians(t), math.radians(p)) for p in phis_deg for t in thetas_deg]
-    integrals = iter(zip(pdf_integrals(model, wis), albedos(model, wis)))
+    if integrals is None:
+        integrals = zip(pdf_integrals(model, wis), albedos(model, wis))
+    integrals = iter(integrals)
+    # every incidence's samples in one call each of sample, eval and pdf (the same random
+    # numbers, in the same order, as one draw of n_samples per incidence)
+    at_all = iter(_sampling_batches(model, wis, rng.random((len(wis) * n_samples, 3)), n_samples))
     for p in phis_deg:
         for t in thetas_deg:
             here = dict(theta_i_deg=t, phi_i_deg=p)
-            wi = direction(math.radians(t), math.radians(p))
-            at, msgs = _sampling_at(model, wi, rng.random((n_samples, 3)), tol, sigmas, *next(integrals))
+            at, msgs = _sampling_at(*next(at_all), tol, sigmas, *next(integrals))
             for key, val in at.items():
                 if val > figs[key]:
                     figs[key] = float(val)
@@ -225,15 +236,30 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
                           dict(worst, problems=problems[:5]), figs)
 
 
-def _sampling_at(model, wi, u, tol, sigmas, pint, ref):
-    """The figures of :func:`sampling_consistency` at one incidence ``wi`` from the
-    random numbers ``u`` (``pint``, ``ref``: the pdf integral and the albedo at
-    ``wi``, by quadrature), and a message for each that fails."""
-    n = len(u)
-    s = model.sample(wi, u)
+def _sampling_batches(model, wis, u, n):
+    """``(s, f, pdf)`` of each incidence of ``wis``: ``s = model.sample(wi, u_k)`` with
+    ``u_k`` the ``k``-th block of ``n`` rows of ``u``, ``f = model.eval(wi, s.wo)`` and
+    ``pdf = model.pdf(wi, s.wo)``, computed for all incidences together (one call of
+    each: one launch each on Dr.Jit)."""
+    wi_rows = np.repeat(np.asarray(wis, dtype=np.float64), n, axis=0)
+    s = model.sample(wi_rows, u)
+    f = model.eval(wi_rows, s.wo)
+    pdf = model.pdf(wi_rows, s.wo)
+    out = []
+    for k in range(len(wis)):
+        b = slice(k * n, (k + 1) * n)
+        out.append((Sample(s.wo[b], s.weight[b], s.pdf[b]), f[b], pdf[b]))
+    return out
+
+
+def _sampling_at(s, f, pdf_wo, tol, sigmas, pint, ref):
+    """The figures of :func:`sampling_consistency` at one incidence from its samples
+    ``s``, ``f = eval(wi, s.wo)`` and ``pdf_wo = pdf(wi, s.wo)`` (``pint``, ``ref``:
+    the pdf integral and the albedo at ``wi``, by quadrature), and a message for
+    each that fails."""
+    n = len(s.pdf)
     valid = s.pdf > 0
     # the weight the contract promises: f cos / pdf on valid samples, 0 on the others
-    f = model.eval(wi, s.wo)
     cos_over_pdf = np.maximum(s.wo[:, 2], 0) / np.where(valid, s.pdf, 1)
     if f.ndim > 1:                     # colour: one channel axis
         valid_c, cos_over_pdf = valid[:, None], cos_over_pdf[:, None]
@@ -241,7 +267,7 @@ def _sampling_at(model, wi, u, tol, sigmas, pint, ref):
         valid_c = valid
     expect = np.where(valid_c, f * cos_over_pdf, 0)
     werr = np.max(np.abs(s.weight - expect) / np.maximum(np.abs(expect), 1e-12))
-    perr = np.max(np.abs(model.pdf(wi, s.wo) - s.pdf) / np.maximum(np.abs(s.pdf), 1e-12))
+    perr = np.max(np.abs(pdf_wo - s.pdf) / np.maximum(np.abs(s.pdf), 1e-12))
     finite = np.all(np.isfinite(s.weight)) and np.all(np.isfinite(s.pdf))
     # invalid fraction against the pdf's missing mass
     inv = 1.0 - valid.mean()

@@ -34,11 +34,12 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..bxdf import Sample
 from ..text import jsonable
 from ..integrals.albedo import pdf_phi_sums_many
 from ..integrals.quadrature import HALF_PI, hemisphere_grid, lobe_breaks, panel_rule
 
-__all__ = ["AdaptiveBinning", "BINNINGS", "Cells", "Chi2Result", "FixedBinning", "chi2", "sidak"]
+__all__ = ["AdaptiveBinning", "BINNINGS", "Cells", "Chi2Result", "FixedBinning", "chi2", "chi2_many", "sidak"]
 
 
 @dataclass
@@ -141,7 +142,12 @@ class AdaptiveBinning:
     m: int = 8
 
     def cells(self, model, wi) -> Cells:
-        return Cells(*_adaptive_cells(model, wi, self.n_theta, self.n_phi, self.m))
+        return self.cells_many(model, [wi])[0]
+
+    def cells_many(self, model, wis) -> list:
+        """:meth:`cells` of each incidence of ``wis``, integrated together (every
+        refinement step of every incidence in one launch)."""
+        return [Cells(*c) for c in _adaptive_cells(model, wis, self.n_theta, self.n_phi, self.m)]
 
 
 @dataclass(frozen=True)
@@ -157,28 +163,46 @@ class FixedBinning:
     def cells(self, model, wi) -> Cells:
         return Cells(*_fixed_cells(model, wi, self.n_theta, self.n_phi, self.ires))
 
+    def cells_many(self, model, wis) -> list:
+        """:meth:`cells` of each incidence of ``wis``."""
+        return [self.cells(model, wi) for wi in wis]
+
 
 #: The binnings ``chi2(method=...)`` names.
 BINNINGS = {"adaptive": AdaptiveBinning, "fixed": FixedBinning}
 
 
-def _adaptive_cells(model, wi, n_theta, n_phi, m):
-    peaks = model.peak_directions(wi)
-    # graded breakpoints (refined toward the lobe): the pilot rule, and reused inside every cell
-    tb_glob, pb_glob, phi0 = lobe_breaks(wi, peaks)
-    pilot = hemisphere_grid(wi, peaks, m=8, theta_breaks=tb_glob, phi_breaks=pb_glob)
-    mass = model.pdf(wi, pilot.wo) * pilot.weight
-    phi_lo, phi_hi = phi0 - math.pi, phi0 + math.pi
-    t_edges = _quantile_edges(pilot.theta, mass.sum(axis=1), 0.0, HALF_PI, n_theta)
-    bands = []      # per band: (ta, tb, phi edges, theta breaks, phi breaks)
-    for b in range(len(t_edges) - 1):
-        ta, tb = t_edges[b], t_edges[b + 1]
-        sel = (pilot.theta >= ta) & (pilot.theta < tb) if b < len(t_edges) - 2 else (pilot.theta >= ta)
-        p_edges = _quantile_edges(pilot.phi, mass[sel].sum(axis=0), phi_lo, phi_hi, n_phi)
-        tbr = np.unique(np.concatenate([[ta, tb], tb_glob[(tb_glob > ta) & (tb_glob < tb)]]))
-        pbr = np.unique(np.concatenate([p_edges, pb_glob[(pb_glob > phi_lo) & (pb_glob < phi_hi)]]))
-        bands.append([ta, tb, p_edges, tbr, pbr])
-    expected = _bands_expected(model, wi, bands, m)
+def _adaptive_cells(model, wis, n_theta, n_phi, m):
+    """``(t_edges, cells, phi0)`` of each incidence of ``wis`` (stages 1-2): the pilot
+    rules' pdf in one call, then every band of every incidence integrated together
+    at each refinement step (one launch on Dr.Jit)."""
+    pilots = []
+    for wi in wis:
+        peaks = model.peak_directions(wi)
+        # graded breakpoints (refined toward the lobe): the pilot rule, and reused inside every cell
+        tb_glob, pb_glob, phi0 = lobe_breaks(wi, peaks)
+        pilot = hemisphere_grid(wi, peaks, m=8, theta_breaks=tb_glob, phi_breaks=pb_glob)
+        pilots.append((tb_glob, pb_glob, phi0, pilot))
+    sizes = [p[3].wo.shape[:2] for p in pilots]
+    wo = np.concatenate([p[3].wo.reshape(-1, 3) for p in pilots])
+    wi_rows = np.repeat(np.asarray(wis, dtype=np.float64), [a * b for a, b in sizes], axis=0)
+    pdfs = np.split(np.asarray(model.pdf(wi_rows, wo)), np.cumsum([a * b for a, b in sizes])[:-1])
+    bands, owner, heads = [], [], []   # per band: [ta, tb, phi edges, theta breaks, phi breaks]
+    for k, ((tb_glob, pb_glob, phi0, pilot), pdf, shape) in enumerate(zip(pilots, pdfs, sizes)):
+        mass = pdf.reshape(shape) * pilot.weight
+        phi_lo, phi_hi = phi0 - math.pi, phi0 + math.pi
+        t_edges = _quantile_edges(pilot.theta, mass.sum(axis=1), 0.0, HALF_PI, n_theta)
+        heads.append((t_edges, phi0, len(bands)))
+        for b in range(len(t_edges) - 1):
+            ta, tb = t_edges[b], t_edges[b + 1]
+            sel = (pilot.theta >= ta) & (pilot.theta < tb) if b < len(t_edges) - 2 else (pilot.theta >= ta)
+            p_edges = _quantile_edges(pilot.phi, mass[sel].sum(axis=0), phi_lo, phi_hi, n_phi)
+            tbr = np.unique(np.concatenate([[ta, tb], tb_glob[(tb_glob > ta) & (tb_glob < tb)]]))
+            pbr = np.unique(np.concatenate([p_edges, pb_glob[(pb_glob > phi_lo) & (pb_glob < phi_hi)]]))
+            bands.append([ta, tb, p_edges, tbr, pbr])
+            owner.append(k)
+    wis = np.asarray(wis, dtype=np.float64)
+    expected = _bands_expected(model, wis[owner], bands, m)
     # Refine (midpoints in both angles) until the cell integrals settle: a lobe
     # concentrated along a curve (nu = 0, nv = 10^4) is not a point the graded
     # breakpoints can aim at.  Every band still refining is integrated in one call.
@@ -188,7 +212,7 @@ def _adaptive_cells(model, wi, n_theta, n_phi, m):
             break
         for b in active:
             bands[b][3], bands[b][4] = _bisect(bands[b][3]), _bisect(bands[b][4])
-        fine = _bands_expected(model, wi, [bands[b] for b in active], m)
+        fine = _bands_expected(model, wis[[owner[b] for b in active]], [bands[b] for b in active], m)
         still = []
         for b, f in zip(active, fine):
             e = expected[b]
@@ -196,20 +220,24 @@ def _adaptive_cells(model, wi, n_theta, n_phi, m):
                 still.append(b)
             expected[b] = f
         active = still
-    cells = [(ta, tb, p_edges, e) for (ta, tb, p_edges, _, _), e in zip(bands, expected)]
-    return t_edges, cells, phi0
+    out = []
+    for k, (t_edges, phi0, first) in enumerate(heads):
+        last = heads[k + 1][2] if k + 1 < len(heads) else len(bands)
+        cells = [(ta, tb, p_edges, e) for (ta, tb, p_edges, _, _), e in zip(bands[first:last], expected[first:last])]
+        out.append((t_edges, cells, phi0))
+    return out
 
 
 def _bisect(b):
     return np.sort(np.concatenate([b, 0.5 * (b[:-1] + b[1:])]))
 
 
-def _bands_expected(model, wi, bands, m):
+def _bands_expected(model, wis, bands, m):
     """Integral of the pdf over each cell ``[tbr[0], tbr[-1]] x [p_edges[j], p_edges[j+1]]``
-    of every band ``(ta, tb, p_edges, tbr, pbr)`` (all bands in one
-    :func:`~plausible.integrals.albedo.pdf_phi_sums_many` call)."""
+    of every band ``(ta, tb, p_edges, tbr, pbr)``, band ``k`` at incidence ``wis[k]``
+    (all bands in one :func:`~plausible.integrals.albedo.pdf_phi_sums_many` call)."""
     rules = [(panel_rule(tbr, m), panel_rule(pbr, m)) for _, _, _, tbr, pbr in bands]
-    sums = pdf_phi_sums_many(model, wi, [(tn, tw * np.sin(tn), pn) for (tn, tw), (pn, _) in rules])
+    sums = pdf_phi_sums_many(model, wis, [(tn, tw * np.sin(tn), pn) for (tn, tw), (pn, _) in rules])
     out = []
     for (_, _, p_edges, _, _), (_, (pn, pw)), per_phi in zip(bands, rules, sums):
         idx = np.clip(np.searchsorted(p_edges, pn, side="right") - 1, 0, len(p_edges) - 2)
@@ -250,6 +278,20 @@ def chi2(model, wi, *, n_samples: int = 200_000, n_theta: int = 16, n_phi: int =
     ``min_expected`` samples are pooled.  Returns :class:`Chi2Result`;
     ``passed`` is ``p_value >= sidak(alpha, n_tests)``.
     """
+    return chi2_many(model, [wi], seeds=[seed], n_samples=n_samples, n_theta=n_theta, n_phi=n_phi,
+                     alpha=alpha, n_tests=n_tests, min_expected=min_expected, m=m, method=method,
+                     binning=binning)[0]
+
+
+def chi2_many(model, wis, *, seeds=None, n_samples: int = 200_000, n_theta: int = 16, n_phi: int = 16,
+              alpha: float = 0.01, n_tests: int = 1, min_expected: float = 5.0, m: int = 8,
+              method: str = "adaptive", binning=None) -> list:
+    """:func:`chi2` at each incidence of ``wis`` (``seeds``: one per incidence, default
+    ``0, 1, ...``), computed together: the cells of every incidence in one
+    refinement (``binning.cells_many`` where the binning has it), every
+    incidence's samples in one ``sample`` call.  Each result is the one
+    :func:`chi2` gives for that incidence and seed (up to the rounding of the
+    backend the larger calls get).  Returns a list of :class:`Chi2Result`."""
     if binning is None:
         if method not in BINNINGS:
             raise ValueError(f"method must be one of {', '.join(map(repr, BINNINGS))}, got {method!r}")
@@ -257,11 +299,25 @@ def chi2(model, wi, *, n_samples: int = 200_000, n_theta: int = 16, n_phi: int =
                    else FixedBinning(n_theta, n_phi))
     if n_samples < 1000:
         raise ValueError(f"n_samples must be >= 1000, got {n_samples}")
-    wi = np.asarray(wi, dtype=np.float64)
-    wi = wi / np.linalg.norm(wi)
+    wis = [np.asarray(wi, dtype=np.float64) for wi in wis]
+    wis = [wi / np.linalg.norm(wi) for wi in wis]
+    seeds = list(range(len(wis))) if seeds is None else list(seeds)
+    if len(seeds) != len(wis):
+        raise ValueError(f"seeds must give one seed per incidence ({len(wis)}), got {len(seeds)}")
     a1 = sidak(alpha, n_tests)
-    cells = binning.cells(model, wi)
-    s = model.sample(wi, np.random.default_rng(seed).random((n_samples, 3)))
+    many = getattr(binning, "cells_many", None)
+    cells = many(model, wis) if many is not None else [binning.cells(model, wi) for wi in wis]
+    u = np.concatenate([np.random.default_rng(seed).random((n_samples, 3)) for seed in seeds])
+    s = model.sample(np.repeat(np.asarray(wis), n_samples, axis=0), u)
+    out = []
+    for k, (wi, c) in enumerate(zip(wis, cells)):
+        b = slice(k * n_samples, (k + 1) * n_samples)
+        out.append(_test(c, Sample(s.wo[b], s.weight[b], s.pdf[b]), n_samples, a1, min_expected, wi))
+    return out
+
+
+def _test(cells, s, n_samples, a1, min_expected, wi) -> Chi2Result:
+    """Stages 3-4 of one incidence from its cells and samples."""
     obs, exp, desc = _histogram(cells, s, n_samples)
     zero = (exp <= 0) & (obs > 0)
     if np.any(zero):      # samples where the pdf integrates to zero: no statistic needed

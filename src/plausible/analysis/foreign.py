@@ -19,6 +19,9 @@ class ForeignBxDF:
     """Base of the adapters: see the module docstring."""
 
     channels = None
+    #: True where ``_value``/``_density`` only read their rows (then they may be views of the
+    #: validated input, not copies); a foreign callable gets writable copies, as from a gather.
+    _reads_rows_only = False
 
     def _directions(self, name: str, w) -> np.ndarray:
         return as_directions(name, w)
@@ -45,7 +48,13 @@ class ForeignBxDF:
     def _over_upper(self, fn, a, b, tail):
         """``fn`` on the pairs with both directions above the horizon, zero elsewhere, by chunks."""
         out = np.zeros((len(a),) + tail)
-        up = np.nonzero((a[:, 2] > HORIZON) & (b[:, 2] > HORIZON))[0]
+        above = (a[:, 2] > HORIZON) & (b[:, 2] > HORIZON)
+        if np.all(above):   # every pair (a quadrature grid): slices, no gather of the rows, no scatter
+            rows = np.ascontiguousarray if self._reads_rows_only else np.array   # a callable gets its own copies
+            for s in range(0, len(a), CHUNK):
+                out[s:s + CHUNK] = fn(rows(a[s:s + CHUNK]), rows(b[s:s + CHUNK]))
+            return out
+        up = np.nonzero(above)[0]
         for s in range(0, len(up), CHUNK):
             k = up[s:s + CHUNK]
             out[k] = fn(np.ascontiguousarray(a[k]), np.ascontiguousarray(b[k]))

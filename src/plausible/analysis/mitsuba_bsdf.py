@@ -57,7 +57,7 @@ import math
 import numpy as np
 
 from ..bxdf import Sample
-from ..directions import CHUNK, as_array, check_directions
+from ..directions import CHUNK, _check_block, as_array, check_directions, norm2
 from ..mitsuba.variant import VARIANTS, ensure_variant
 from ..vec import HORIZON
 from .foreign import ForeignBxDF
@@ -206,25 +206,33 @@ class MitsubaBSDF(ForeignBxDF):
 
     def _si(self, wi32):
         mi, dr = self._mi, self._dr
-        si = dr.zeros(mi.SurfaceInteraction3f, len(wi32))
-        si.wi = mi.Vector3f(wi32[:, 0], wi32[:, 1], wi32[:, 2])
+        si = dr.zeros(mi.SurfaceInteraction3f, wi32.shape[1])
+        si.wi = mi.Vector3f(wi32[0], wi32[1], wi32[2])
         si.uv = mi.Point2f(*self.uv)
         return si
 
     def _local(self, w):
-        """plausible's local direction -> the one Mitsuba sees (float32; mirrored for the back side)."""
-        w = np.array(w, dtype=np.float32)
+        """plausible's local directions, rows ``(n, 3)`` -> the ones Mitsuba sees: float32,
+        mirrored for the back side, as contiguous components ``(3, n)`` (one conversion,
+        from which Dr.Jit copies each component without a strided gather)."""
+        w = np.array(np.asarray(w).T, dtype=np.float32, order="C")
         if self.side == "back":
-            w[:, 2] = -w[:, 2]
+            w[2] = -w[2]
         return w
 
     def _vec(self, w32):
-        return self._mi.Vector3f(w32[:, 0], w32[:, 1], w32[:, 2])
+        return self._mi.Vector3f(w32[0], w32[1], w32[2])
 
-    def _spectrum(self, v, n):
-        a = np.asarray(v.numpy() if hasattr(v, "numpy") else v, dtype=np.float64)
+    def _spectrum(self, v, n, scale=None):
+        """Mitsuba's value read back once, as float64 rows ``(n,)`` or ``(n, channels)``,
+        divided by ``scale`` (shape ``(n,)``) if given (in float64: the float32 values
+        convert exactly, so this is the division of their float64 copies)."""
+        a = np.asarray(v.numpy() if hasattr(v, "numpy") else v)
         a = a.reshape(-1, n)
-        return a.T if a.shape[0] > 1 else a[0]
+        a = a.T if a.shape[0] > 1 else a[0]
+        if scale is None:
+            return a.astype(np.float64)
+        return np.divide(a, scale[:, None] if a.ndim == 2 else scale, dtype=np.float64)
 
     def _probe_channels(self):
         v = self._mi_eval(np.array([[0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, 1.0]]))
@@ -233,15 +241,15 @@ class MitsubaBSDF(ForeignBxDF):
     def _mi_eval(self, a, b):
         wi, wo = self._local(a), self._local(b)
         v = self.bsdf.eval(self._ctx(), self._si(wi), self._vec(wo))
-        cos = np.abs(wo[:, 2].astype(np.float64))
-        v = self._spectrum(v, len(a))
-        return v / (cos[:, None] if v.ndim == 2 else cos)
+        return self._spectrum(v, len(a), np.abs(wo[2].astype(np.float64)))
 
     def _mi_pdf(self, a, b):
         wi, wo = self._local(a), self._local(b)
         return np.asarray(self.bsdf.pdf(self._ctx(), self._si(wi), self._vec(wo)).numpy(), dtype=np.float64)
 
     # -- the contract --------------------------------------------------------------------------
+    _reads_rows_only = True   # _local converts the rows to float32 (a copy)
+
     def _directions(self, name, w):
         return _as_float32_directions(name, w)
 
@@ -254,7 +262,7 @@ class MitsubaBSDF(ForeignBxDF):
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
         a, uu, shape = self._sample_rows(wi, u)
-        uu = np.minimum(uu, 1 - 2.0 ** -24).astype(np.float32)
+        uu = np.array(np.minimum(uu, 1 - 2.0 ** -24).T, dtype=np.float32, order="C")   # components (3, n)
         tail = (self.channels,) if self.channels else ()
         wo = np.zeros((len(a), 3))
         wo[:, 2] = -1.0
@@ -263,8 +271,8 @@ class MitsubaBSDF(ForeignBxDF):
         for s in range(0, len(a), CHUNK):
             e = min(s + CHUNK, len(a))
             wi32 = self._local(a[s:e])
-            bs, w = self.bsdf.sample(self._ctx(mask), self._si(wi32), mi.Float(uu[s:e, 0]),
-                                     mi.Point2f(uu[s:e, 1], uu[s:e, 2]))
+            bs, w = self.bsdf.sample(self._ctx(mask), self._si(wi32), mi.Float(uu[0, s:e]),
+                                     mi.Point2f(uu[1, s:e], uu[2, s:e]))
             o = np.asarray(bs.wo.numpy(), dtype=np.float64).reshape(3, -1).T
             if self.side == "back":
                 o[:, 2] = -o[:, 2]
@@ -367,8 +375,11 @@ UNIT_SLACK = 2.0 ** -20
 
 
 def _unit32(w, nrm):
-    """``w / |w|`` except where ``|w|`` is within :data:`UNIT_SLACK` of 1 (then ``w``)."""
+    """``w / |w|`` except where ``|w|`` is within :data:`UNIT_SLACK` of 1 (then ``w``;
+    ``w`` itself, no copy, when every row is)."""
     near = np.abs(nrm - 1.0) <= UNIT_SLACK
+    if np.all(near):
+        return w
     return np.where(near[..., None], w, w / np.where(nrm > 0, nrm, 1.0)[..., None])
 
 
@@ -377,8 +388,12 @@ def _as_float32_directions(name, w):
     where they are not unit vectors to float32 precision: a direction the adapter
     returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
     a = as_array(name, w)
-    check_directions(name, a)
-    return _unit32(a, np.sqrt(np.sum(a * a, axis=-1)))
+    if a.size <= 3 * CHUNK:   # one pass: the check's |a|^2 is the norm's (norm2 is np.sum(a * a, -1) bitwise)
+        s = _check_block(name, a)
+    else:
+        check_directions(name, a)
+        s = norm2(a)
+    return _unit32(a, np.sqrt(s))
 
 
 def _flag_names(mi, bits: int) -> str:

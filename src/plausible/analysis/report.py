@@ -6,13 +6,15 @@ import json
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from .adapters import as_bxdf, tolerances
-from ..integrals.albedo import direction, is_isotropic
+from ..integrals.albedo import albedos, direction, is_isotropic, pdf_integrals
 from ..progress import start, within
 from ..text import jsonable
 from .checks import (ENERGY_THETAS, PropertyResult, energy, energy_directions, grazing_thetas, reciprocity,
                      sampling_consistency)
-from .chi2 import chi2
+from .chi2 import chi2_many
 
 #: Incidences (theta, phi in degrees) of the default chi-square tests.
 CHI2_DIRECTIONS = ((0, 0), (45, 0), (80, 0))
@@ -173,6 +175,15 @@ def _split_progress(progress, n_views):
     return factory
 
 
+def _albedos_of(model, wis) -> list:
+    """:func:`~plausible.integrals.albedo.albedos` of ``wis``, each distinct incidence
+    integrated once (all in one refinement)."""
+    keys = [tuple(np.asarray(w, dtype=np.float64)) for w in wis]
+    distinct = list(dict.fromkeys(keys))
+    res = dict(zip(distinct, albedos(model, [np.array(k) for k in distinct]))) if distinct else {}
+    return [res[k] for k in keys]
+
+
 def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
     """The four checks of one contract (see :func:`check`)."""
     skip = getattr(model, "not_applicable", {})
@@ -194,28 +205,36 @@ def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
         rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24,
                                        tol=tol["reciprocity"]))
     tick()
+    # the albedos of the energy and the sampling checks' incidences, integrated together
+    e_wis = [direction(math.radians(t), math.radians(p)) for t, p in e_dirs] if "energy" not in skip else []
+    s_wis = ([direction(math.radians(t), math.radians(p))
+              for p in ((0,) if is_isotropic(model) else s_phis) for t in s_thetas]
+             if "sampling" not in skip else [])
+    shared = _albedos_of(model, e_wis + s_wis)
     if "energy" in skip:
         rep.results.append(not_applicable("energy", skip["energy"]))
         tick(len(e_dirs))
     else:
         rep.results.append(energy(model, thetas_deg=thetas, phis_deg=(0.0,) if iso else None,
-                                  progress=within(tick)))
+                                  progress=within(tick), results=shared[:len(e_wis)]))
     if "sampling" in skip:
         rep.results.append(not_applicable("sampling", skip["sampling"]))
         tick(len(s_thetas) * len(s_phis))
     else:
-        rep.results.append(sampling_consistency(model, thetas_deg=s_thetas, phis_deg=s_phis, n_samples=n_s,
-                                                tol=tol["sampling"], progress=within(tick)))
+        rep.results.append(sampling_consistency(
+            model, thetas_deg=s_thetas, phis_deg=s_phis, n_samples=n_s, tol=tol["sampling"],
+            progress=within(tick), integrals=list(zip(pdf_integrals(model, s_wis), shared[len(e_wis):]))))
     if "chi2" in skip:
         rep.results.append(not_applicable("chi2", skip["chi2"]))
         tick(len(chi_dirs))
         return rep
-    results = []
-    for k, (t, p) in enumerate(chi_dirs):
-        r = chi2(model, direction(math.radians(t), math.radians(p)), alpha=alpha, seed=k,
-                 n_tests=len(chi_dirs), n_samples=n_samples // (4 if quick else 1))
-        results.append((t, p, r))
-        tick()
+    # every incidence's test together (cells refined in one launch per step, samples in one call);
+    # incidence k draws from seed k, as one chi2 call per incidence does
+    tests = chi2_many(model, [direction(math.radians(t), math.radians(p)) for t, p in chi_dirs],
+                      seeds=range(len(chi_dirs)), alpha=alpha, n_tests=len(chi_dirs),
+                      n_samples=n_samples // (4 if quick else 1))
+    results = [(t, p, r) for (t, p), r in zip(chi_dirs, tests)]
+    tick(len(chi_dirs))
     worst = min(results, key=lambda x: x[2].p_value)
     rep.results.append(PropertyResult(
         "chi2", all(r.passed for _, _, r in results), worst[2].p_value,

@@ -109,12 +109,18 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
     if tmax is not None:    # the contract's zero below the horizon (rounding at the edge s = 1)
         g = dr.select(wo[2] > 0, F(g), 0.0)
     v = F(g) * (wt * wp)
+    # The reduction mode is named: Dr.Jit's default for a small target on LLVM
+    # (``Expand``, a copy per thread) writes the target's size into the kernel, so every
+    # new count of sums (incidences, azimuth nodes) compiled a new kernel.  ``Direct``
+    # (atomics) suits the per-azimuth sums, whose neighbouring lanes add to different
+    # sums; ``Local`` (reduced within a packet first) the per-incidence ones, whose
+    # neighbouring lanes add to the same sum.
     if per_phi:
         total = dr.zeros(F, A * npp)
-        dr.scatter_reduce(dr.ReduceOp.Add, total, v, pj)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, v, pj, mode=dr.ReduceMode.Direct)
     else:
         total = dr.zeros(F, A * c)
-        dr.scatter_reduce(dr.ReduceOp.Add, total, v, a * cc + chan)
+        dr.scatter_reduce(dr.ReduceOp.Add, total, v, a * cc + chan, mode=dr.ReduceMode.Local)
     return np.asarray(total.numpy(), dtype=np.float64)
 
 

@@ -13,7 +13,7 @@ from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
 from plausible.progress import within
 
-from .core import figure
+from .core import CURVE_TOL, figure
 
 INCIDENCE = (0.0, 30.0, 60.0, 80.0)
 
@@ -69,7 +69,7 @@ def _lobe_figure(ctx, model_name, incidence):
     info = registry.info(model_name)
     th = default_thetas(24 if not ctx.quick else 6)
     ctx.steps(len(th))
-    alb = albedo_curve(m, th, progress=within(ctx.tick))
+    alb = albedo_curve(m, th, progress=within(ctx.tick), tol=CURVE_TOL)
     a = np.asarray(alb.value)
     a = a.mean(axis=-1) if a.ndim > 1 else a
     view = np.linspace(-90, 90, 721)

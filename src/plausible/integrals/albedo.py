@@ -29,6 +29,7 @@ from ..bxdf import BxDF
 from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
+from .keys import exact_text
 from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
 
 
@@ -212,12 +213,16 @@ NUMPY_GROUP = 1 << 20
 
 def pdf_phi_sums_many(model, wi, grids) -> list:
     """:func:`pdf_phi_sums` of many grids ``[(theta, theta_w, phi), ...]`` at one
-    incidence ``wi``, computed together: one Dr.Jit launch for all of them when the
+    incidence ``wi`` (shape ``(3,)``) or each at its own (``wi`` of shape
+    ``(len(grids), 3)``), computed together: one Dr.Jit launch for all of them when the
     backend rule says so (for their total node count), else ``model.pdf`` on
     groups of grids (:data:`NUMPY_GROUP` nodes).  Returns one array per grid,
     of its ``len(phi)``."""
     grids = [tuple(np.asarray(x, dtype=np.float64) for x in g) for g in grids]
     wi = np.asarray(wi, dtype=np.float64)
+    wi = np.broadcast_to(wi, (len(grids), 3)) if wi.shape == (3,) else wi
+    if wi.shape != (len(grids), 3):
+        raise ValueError(f"pdf_phi_sums_many: wi must have shape (3,) or ({len(grids)}, 3), got {wi.shape}")
     n = sum(len(t) * len(p) for t, _, p in grids)
 
     def numpy():
@@ -232,8 +237,8 @@ def pdf_phi_sums_many(model, wi, grids) -> list:
                 theta_w = np.zeros_like(theta)     # zero weight on the padding
                 for row, a in enumerate(idx):
                     theta_w[row, :len(grids[a][1])] = grids[a][1]
-                sums = grid_sums(model, "pdf", np.repeat(wi[None, :], len(idx), axis=0), theta, theta_w,
-                                          phi, np.ones_like(phi), per_phi=True)
+                sums = grid_sums(model, "pdf", np.ascontiguousarray(wi[idx]), theta, theta_w,
+                                 phi, np.ones_like(phi), per_phi=True)
                 for row, a in enumerate(idx):
                     out[a] = sums[row, :len(grids[a][2])]
             return out
@@ -263,18 +268,22 @@ def _pad_groups(shapes) -> list:
 
 
 def _numpy_phi_sums(model, wi, grids):
+    """:func:`pdf_phi_sums_many` with ``model.pdf`` (``wi``: one row per grid)."""
     out, group, size = [], [], 0
+    one = bool(np.all(wi == wi[:1]))    # one incidence: a (3,) wi, as the contract's simplest call
     for k, g in enumerate(grids):
-        group.append(g)
+        group.append(k)
         size += len(g[0]) * len(g[2])
         if size >= NUMPY_GROUP or k == len(grids) - 1:
-            wo = np.concatenate([_wo_grid(t, p).reshape(-1, 3) for t, _, p in group])
-            pdf = model.pdf(wi, wo)
+            wo = np.concatenate([_wo_grid(grids[a][0], grids[a][2]).reshape(-1, 3) for a in group])
+            counts = [len(grids[a][0]) * len(grids[a][2]) for a in group]
+            pdf = model.pdf(np.array(wi[0]) if one else np.repeat(wi[group], counts, axis=0), wo)
             at = 0
-            for t, w, p in group:
-                cell = pdf[at:at + len(t) * len(p)].reshape(len(t), len(p))
+            for a, c in zip(group, counts):
+                t, w, p = grids[a]
+                cell = pdf[at:at + c].reshape(len(t), len(p))
                 out.append((cell * w[:, None]).sum(axis=0))
-                at += len(t) * len(p)
+                at += c
             group, size = [], 0
     return out
 
@@ -359,7 +368,7 @@ def remembering():
     """Within this block, every integral of :func:`albedo`, :func:`albedos`,
     :func:`pdf_integral` and :func:`pdf_integrals` is remembered in this process and
     not computed again when asked again for the same model (its exact text,
-    :func:`memo_key`), incidence, ``tol`` and ``levels``: the same albedo in two
+    :func:`.keys.exact_text`), incidence, ``tol`` and ``levels``: the same albedo in two
     figures made by one process, or twice in one figure.  The result is the one the
     first call computed (each incidence is refined on its own, so it is the value a
     second computation gives, up to the rounding of a launch's sums).  Off by default:
@@ -376,49 +385,6 @@ def remembering():
             _MEMORY = None
 
 
-def memo_key(model) -> str | None:
-    """The exact text of ``model`` for :func:`remembering`, or None when it has none
-    (then nothing is remembered for it): a model that names itself (``cache_key()``, a
-    foreign BSDF held as a model), a sum its parts and scales, any other
-    :class:`~plausible.bxdf.BxDF` its class and every parameter at full precision
-    (floats by ``repr``, nested models alike).  Never ``repr(model)`` or its 6
-    significant digits; a parameter of another type makes the text None."""
-    key = getattr(model, "cache_key", None)
-    if callable(key):
-        return f"key:{key()}"
-    if not isinstance(model, BxDF):
-        return None
-    if hasattr(model, "parts") and hasattr(model, "scales"):
-        parts = [memo_key(m) for m in model.parts] + [_exact_value(x) for x in model.scales]
-        return None if None in parts else "sum(" + ", ".join(parts) + ")"
-    params = getattr(model, "params", None)
-    if not isinstance(params, dict):
-        return None
-    vals = [_exact_value(v) for v in params.values()]
-    if None in vals:
-        return None
-    return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
-        f"{k}={v}" for k, v in zip(params, vals)) + ")"
-
-
-def _exact_value(v) -> str | None:
-    if v is None or isinstance(v, (bool, str)):
-        return repr(v)
-    if isinstance(v, (int, np.integer)):
-        return repr(int(v))
-    if isinstance(v, (float, np.floating)):
-        return repr(float(v))
-    if isinstance(v, np.ndarray) and v.dtype.kind in "biuf":
-        return f"array{v.shape}" + repr(v.astype(np.float64).ravel().tolist())
-    if isinstance(v, (tuple, list)):
-        parts = [_exact_value(x) for x in v]
-        return None if None in parts else "(" + ", ".join(parts) + ")"
-    if isinstance(v, BxDF):
-        k = memo_key(v)
-        return None if k is None else f"[{k}]"
-    return None
-
-
 def _copy(r: AlbedoResult) -> AlbedoResult:
     """A remembered result handed out: its arrays copied (a caller may change them in place)."""
     if np.ndim(r.value) == 0:
@@ -431,7 +397,7 @@ def _results(model, kind, wis, tol, levels):
     (remembered within :func:`remembering`)."""
     zero = np.zeros(model.channels) if (kind == "f" and model.channels) else 0.0
     memory = _MEMORY
-    mk = memo_key(model) if memory is not None else None
+    mk = exact_text(model) if memory is not None else None
     out = [AlbedoResult(zero, zero)] * len(wis)
     up, keys = [], {}
     for k, w in enumerate(wis):

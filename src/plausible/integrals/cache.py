@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import tables
-from ..bxdf import BxDF
 from ..progress import start
 from ..tables import AngleTable
 from .albedo import albedo, albedo_table, is_isotropic
+from .keys import exact_text
 
 #: Tables built in this process: key -> AngleTable.
 _TABLES: dict = {}
@@ -41,35 +41,10 @@ def table_cache_dir() -> Path | None:
 
 
 def spec_of(model) -> str:
-    """A canonical text of a model and its parameters (the cache key): the
-    registry's spec string, whose floats are exact (``repr``), else the class and
-    its parameters at full precision.  Not ``repr(model)``: it prints 6
-    significant digits, so ``n=20`` and ``n=20.00004`` shared a table.  A model
-    that names itself (``cache_key()``, e.g. a foreign BSDF held as a model) gives
-    that; a sum outside the registry its parts and scales."""
-    key = getattr(model, "cache_key", None)
-    if callable(key):
-        return key()
-    if getattr(model, "info", None) is not None:
-        return model.spec()
-    if hasattr(model, "parts") and hasattr(model, "scales"):
-        return "sum(" + ", ".join(f"[{spec_of(m)}]*{_exact(s)}" for m, s in zip(model.parts, model.scales)) + ")"
-    params = getattr(model, "params", None)
-    if isinstance(params, dict):
-        return f"{type(model).__module__}.{type(model).__qualname__}(" + ", ".join(
-            f"{k}={_exact(v)}" for k, v in params.items()) + ")"
-    return repr(model)
-
-
-def _exact(v) -> str:
-    """A parameter value as text that tells apart any two different values."""
-    if isinstance(v, BxDF):
-        return "[" + spec_of(v) + "]"
-    if isinstance(v, np.ndarray):
-        return repr(v.astype(np.float64).tolist())
-    if isinstance(v, (list, tuple)):
-        return "(" + ", ".join(_exact(x) for x in v) + ")"
-    return repr(float(v)) if isinstance(v, float) else repr(v)
+    """The cache key of a model: its exact text (:func:`.keys.exact_text`), else
+    its ``repr`` (a model without one; two such models may share a table only
+    when their reprs agree)."""
+    return exact_text(model) or repr(model)
 
 
 @lru_cache(maxsize=None)
