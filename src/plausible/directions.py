@@ -57,7 +57,10 @@ _SAFE_LO, _SAFE_HI = 1e-290, 1e290
 UNIT_TOL = 4e-15
 
 
-def _check_block(name: str, b: np.ndarray, check_zero: bool = True):
+def check_block(name: str, b: np.ndarray, check_zero: bool = True):
+    """The checks of :func:`check_directions` on one block ``b`` (at most
+    :data:`CHUNK` rows): finite and (``check_zero``) non-zero, with the error
+    naming ``name``.  Returns ``norm2(b)``, for a caller that normalises next."""
     with np.errstate(over="ignore", under="ignore"):
         s = norm2(b)
     if not np.all(np.isfinite(s)) and not np.all(np.isfinite(b)):
@@ -74,9 +77,9 @@ def check_directions(name: str, a: np.ndarray) -> None:
     zero vector anywhere), ``CHUNK`` rows at a time (so that checking allocates
     O(CHUNK), not O(N), temporaries)."""
     for b in _blocks(a):
-        _check_block(name, b, check_zero=False)
+        check_block(name, b, check_zero=False)
     for b in _blocks(a):
-        _check_block(name, b)
+        check_block(name, b)
 
 
 def max_abs(ops, c):
@@ -162,7 +165,7 @@ def normalise(a: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
 def checked_unit(name: str, a: np.ndarray) -> np.ndarray:
     """:func:`check_directions` and :func:`normalise` in one pass (batches of at
     most ``CHUNK`` rows)."""
-    return normalise(a, _check_block(name, a))
+    return normalise(a, check_block(name, a))
 
 
 def as_directions(name: str, w) -> np.ndarray:
@@ -254,6 +257,7 @@ def stack(c):
     return np.stack(np.broadcast_arrays(*c), axis=-1)
 
 
-__all__ = ["CHUNK", "UNIT_TOL", "as_array", "as_directions", "as_unit_interval", "check_directions", "chunked",
+__all__ = ["CHUNK", "UNIT_TOL", "as_array", "as_directions", "as_unit_interval", "check_block", "check_directions",
+           "chunked",
            "interval_lanes", "max_abs", "norm2", "normalise", "outside_unit_interval", "prepare", "raw_rows",
            "safe_norm2", "split", "stack", "unit_components", "unit_fn", "unit_lanes"]

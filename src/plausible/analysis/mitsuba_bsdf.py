@@ -57,7 +57,7 @@ import math
 import numpy as np
 
 from ..bxdf import Sample
-from ..directions import CHUNK, _check_block, as_array, check_directions, norm2
+from ..directions import CHUNK, check_block, as_array, check_directions, norm2
 from ..mitsuba.variant import VARIANTS, ensure_variant
 from ..vec import HORIZON
 from .foreign import ForeignBxDF
@@ -389,7 +389,7 @@ def _as_float32_directions(name, w):
     returned from Mitsuba's sampler goes back to Mitsuba with the same bits."""
     a = as_array(name, w)
     if a.size <= 3 * CHUNK:   # one pass: the check's |a|^2 is the norm's (norm2 is np.sum(a * a, -1) bitwise)
-        s = _check_block(name, a)
+        s = check_block(name, a)
     else:
         check_directions(name, a)
         s = norm2(a)
