@@ -10,7 +10,7 @@ import numpy as np
 import plausible
 from plausible.analysis import albedo, direction
 
-from .core import figure
+from .core import CURVE_TOL, figure
 from . import scenes as S
 
 EXPONENTS = (10, 100, 1000, 10000)
@@ -27,14 +27,17 @@ def _patch_check(ctx, img, width, model, label, res):
     """Mean of the pixels around the image centre (normal incidence) against the
     directional albedo there; tolerance = 4 standard errors of the pixel mean plus
     the albedo's change across the patch (the patch spans incidence 0..theta_max).
-    A colour model: the channel means (as the pixels)."""
+    A colour model: the channel means (as the pixels).  The albedos to an error bound of
+    :data:`~plausible.figures.core.CURVE_TOL` (1e-5), far below the tolerance."""
     r = S.radius_map(res, width)
     rmax = max(0.06, 2.0 * 2 * width / res)
     sel = r <= rmax
     px = img[sel].mean(axis=-1)
     got, se = float(px.mean()), float(px.std(ddof=1) / math.sqrt(px.size))
-    a0 = float(np.mean(albedo(model, direction(0.0)).value))
-    a1 = float(np.mean(albedo(model, direction(math.asin(min(rmax, 0.999)))).value))
+    # to CURVE_TOL (1e-5): the tolerance is at least 4 standard errors of the pixel mean (1e-3 or more);
+    # at normal incidence, the value of an albedo curve that this process integrated already (remembering)
+    a0 = float(np.mean(albedo(model, direction(0.0), tol=CURVE_TOL).value))
+    a1 = float(np.mean(albedo(model, direction(math.asin(min(rmax, 0.999))), tol=CURVE_TOL).value))
     tol = 4 * se + abs(a1 - a0)
     ctx.measure(f"{label}: centre luminance", got, a0, tol,
                 note=f"{sel.sum()} pixels within {math.degrees(math.asin(min(rmax, .999))):.1f} deg of normal "
