@@ -57,12 +57,17 @@ def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
 
 
 def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi, tmax=None, tmin=None):
+    """One launch of :func:`grid_sums`: a lane per ``(incidence a, azimuth node j,
+    channel)``, which sums its ``nt`` polar nodes in a loop of the kernel (a symbolic
+    ``drjit.while_loop``: the per-azimuth values are read once per lane, and only the
+    polar node's two values per iteration); the per-incidence sums over ``j`` are
+    NumPy's (pairwise) sums of the lanes read back."""
     A, nt = theta.shape
     npp = phi.shape[1]
-    lanes = A * nt * npp * c
-    # lane = ((a * nt + i) * np + j) * c + chan, split with float64 arithmetic (exact
-    # for fewer than 2^40 lanes; a vectorised multiply-floor is much faster than
-    # integer division, which LLVM does lane by lane)
+    lanes = A * npp * c
+    # lane = (a * np + j) * c + chan, split with float64 arithmetic (exact for fewer
+    # than 2^40 lanes; a vectorised multiply-floor is much faster than integer
+    # division, which LLVM does lane by lane)
     lane = F(dr.arange(U, lanes))
 
     def divmod_(x, d):
@@ -70,58 +75,63 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
         return q, x - q * dr.opaque(F, float(d))
 
     pt, chan = divmod_(lane, c) if c > 1 else (lane, None)
-    row, j = divmod_(pt, npp)
-    a, i = divmod_(row, nt)
-    ti, pj, a = U(row), U(a * dr.opaque(F, float(npp)) + j), U(a)
+    a, _ = divmod_(pt, npp)
+    pj, a = U(pt), U(a)
     chan = U(chan) if c > 1 else dr.zeros(U, 1)
-    cc = dr.opaque(U, c)
 
     def table(x):
         # a single value as an opaque scalar: a one-element array made from NumPy
         # memory enters the kernel with the alignment of its address, which varies,
         # and so would the kernel (two variants to compile)
-        a = np.ascontiguousarray(x, dtype=np.float64).ravel()
-        return dr.opaque(F, float(a[0])) if a.size == 1 else F(a)
+        x = np.ascontiguousarray(x, dtype=np.float64).ravel()
+        return dr.opaque(F, float(x[0])) if x.size == 1 else F(x)
 
-    cp, sp, wp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi), phi_w))
+    cp, sp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi)))
     wi = tuple(dr.gather(F, table(wis[:, k]), a) for k in range(3))
-    if tmax is None:
-        st, ct, wt = (dr.gather(F, table(x), ti) for x in (np.sin(theta), np.cos(theta), theta_w))
-        wo = (st * cp, st * sp, ct)
-    else:   # the half-vector frame: h at (s tmax, phi), wo its mirror image of wi
-        tm = dr.gather(F, table(tmax), pj)
-        t = dr.gather(F, table(theta), ti) * tm
-        if tmin is not None:
-            t = t + dr.gather(F, table(tmin), pj)
-        st, ct = dr.sincos(t)
-        h = (st * cp, st * sp, ct)
-        d = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]
-        wo = tuple(2.0 * d * hk - wk for hk, wk in zip(h, wi))
-        wt = dr.gather(F, table(theta_w), ti) * tm * st * (4.0 * d)
-        ct = wo[2]
+    row0 = a * dr.opaque(U, nt)          # the first polar node of the lane's incidence
     mv = kernel_view(model, dr, F, chan, c)
-    if kind == "f":
-        g = mv._f(ops, wi, wo, mv.p) * ct
-    else:
-        g = mv._pdf(ops, wi, wo, mv.q)
-    if not (_is_jit(g) or isinstance(g, (int, float))):
-        raise _NotJit(type(g).__name__)
-    if tmax is not None:    # the contract's zero below the horizon (rounding at the edge s = 1)
-        g = dr.select(wo[2] > 0, F(g), 0.0)
-    v = F(g) * (wt * wp)
-    # The reduction mode is named: Dr.Jit's default for a small target on LLVM
-    # (``Expand``, a copy per thread) writes the target's size into the kernel, so every
-    # new count of sums (incidences, azimuth nodes) compiled a new kernel.  ``Direct``
-    # (atomics) suits the per-azimuth sums, whose neighbouring lanes add to different
-    # sums; ``Local`` (reduced within a packet first) the per-incidence ones, whose
-    # neighbouring lanes add to the same sum.
+    if tmax is None:
+        tabs = tuple(table(x) for x in (np.sin(theta), np.cos(theta), theta_w))
+    else:   # the half-vector frame: h at (tmin + s tmax, phi), wo its mirror image of wi
+        tabs = (table(theta), table(theta_w))
+        tm = dr.gather(F, table(tmax), pj)
+        t0 = dr.gather(F, table(tmin), pj) if tmin is not None else None
+
+    def node(i):
+        """``g`` times the polar weight at the lane's azimuth and polar node ``i``."""
+        k = row0 + i
+        if tmax is None:
+            st, ct, wt = (dr.gather(F, x, k) for x in tabs)
+            wo = (st * cp, st * sp, ct)
+        else:
+            t = dr.gather(F, tabs[0], k) * tm
+            if t0 is not None:
+                t = t + t0
+            st, ct = dr.sincos(t)
+            h = (st * cp, st * sp, ct)
+            d = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]
+            wo = tuple(2.0 * d * hk - wk for hk, wk in zip(h, wi))
+            wt = dr.gather(F, tabs[1], k) * tm * st * (4.0 * d)
+            ct = wo[2]
+        if kind == "f":
+            g = mv._f(ops, wi, wo, mv.p) * ct
+        else:
+            g = mv._pdf(ops, wi, wo, mv.q)
+        if not (_is_jit(g) or isinstance(g, (int, float))):
+            raise _NotJit(type(g).__name__)
+        g = F(g)
+        if tmax is not None:    # the contract's zero below the horizon (rounding at the edge s = 1)
+            g = dr.select(wo[2] > 0, g, 0.0)
+        return g * wt
+
+    # Every lane runs the same count of iterations (the rows are padded to nt), and the
+    # count is an opaque input: one kernel for every grid size.
+    _, acc = dr.while_loop((dr.zeros(U, lanes), dr.zeros(F, lanes)), lambda i, acc: i < dr.opaque(U, nt),
+                           lambda i, acc: (i + 1, acc + node(i)), labels=("i", "acc"), mode="symbolic")
+    v = np.asarray(acc.numpy(), dtype=np.float64).reshape(A, npp, c) * np.asarray(phi_w)[:, :, None]
     if per_phi:
-        total = dr.zeros(F, A * npp)
-        dr.scatter_reduce(dr.ReduceOp.Add, total, v, pj, mode=dr.ReduceMode.Direct)
-    else:
-        total = dr.zeros(F, A * c)
-        dr.scatter_reduce(dr.ReduceOp.Add, total, v, a * cc + chan, mode=dr.ReduceMode.Local)
-    return np.asarray(total.numpy(), dtype=np.float64)
+        return v.reshape(A * npp)
+    return v.sum(axis=1).reshape(A * c)
 
 
 __all__ = ["MAX_LANES", "grid_sums"]
