@@ -41,16 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .mitsuba import PROBE_THETAS, REPORT_THETAS
+from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
 
 __all__ = ["Conversion", "Converted", "Source", "TOLERANCE", "albedo_check", "convert", "mitsuba_xml", "read_sources"]
 
 #: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
 #: conversion of a conserving source is expected to keep; beyond it a warning.
 TOLERANCE = 0.05
-#: Incidences (degrees) at which a source's albedo is probed for energy conservation: the
-#: fit's (:data:`.mitsuba.PROBE_THETAS`, 0-80) and 85 (the fit reuses these albedos).
-CONSERVE_THETAS = tuple(sorted(set(PROBE_THETAS) | {85.0}))
 
 
 @dataclass
@@ -307,8 +304,8 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         families, why = CM.candidates(src.model, src_alb)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
-        family = r.family
-        tried = ", ".join(f"{x.family} {x.figure:.3g}" for x in fits)
+        family = r.key
+        tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
         notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
     else:
         r = CM.fit_family(src.model, family, metric, probe=probe, target=target)
@@ -323,13 +320,15 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         model = registry.make(family, **CM.model_params(d))
         return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
                          model)
-    return Converted(src.name, src.spec, f"mitsuba:{family}", d, r.errors, alb, warn, notes, textures, d)
+    return Converted(src.name, src.spec, f"mitsuba:{r.family}", d, r.errors, alb, warn, notes, textures, d)
 
 
 #: Which Mitsuba parameter an MTL texture replaces, per family.
 TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_reflectance",
-                            "principled": "base_color", "blendbsdf": "bsdf_0.reflectance"},
-                 "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance"}}
+                            "principled": "base_color", "blendbsdf": "bsdf_0.reflectance",
+                            "blendbsdf-tir": "bsdf_0.diffuse_reflectance"},
+                 "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance",
+                            "blendbsdf-tir": "bsdf_1.specular_reflectance"}}
 
 
 def _with_textures(d, family, textures, notes):

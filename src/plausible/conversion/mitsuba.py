@@ -61,6 +61,9 @@ __all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fi
 REPORT_THETAS = (0.0, 45.0, 75.0)
 #: Incidences (degrees) of the fitting pairs and albedo terms: the fitting package's and 75.
 PROBE_THETAS = tuple(sorted(set(M.THETAS_DEG) | set(REPORT_THETAS)))
+#: Incidences (degrees) at which a source's albedo is probed for energy conservation: the
+#: fit's (:data:`PROBE_THETAS`, 0-80) and 85 (the fit reuses these albedos; :func:`candidates` reads them).
+CONSERVE_THETAS = tuple(sorted(set(PROBE_THETAS) | {85.0}))
 #: The rule of the albedo inside the fit, ``(m, levels, pole_levels)`` of
 #: :func:`plausible.integrals.quadrature.half_vector_rule`: every family here is a
 #: diffuse term and lobes about the mirror direction, which the half-vector frame
@@ -101,6 +104,9 @@ class Family:
     axes: tuple
     slots: tuple
     offset: bool = False
+    #: A blend of two families (``blendbsdf`` made by :func:`blend`): ``((prefix, Family), (prefix, Family))``,
+    #: whose bases are the parts' bases weighted by ``1 - weight`` and ``weight`` (:func:`_basis_now`).
+    parts: tuple = ()
 
     def bsdf_dict(self, point: dict, colours: dict) -> dict:
         """The ``mi.load_dict`` description at axis values ``point`` and slot colours
@@ -138,10 +144,42 @@ def get_entry(d: dict, dotted: str):
 #: specular + (1 - max F_d) base / pi``, ``metal_brdf = specular (base + (1 - base) fw)``).
 PLAUSIBLE_TYPES = ("gltf-pbr",)
 ALPHA = Axis("alpha", tuple(float(x) for x in np.geomspace(0.004, 1.0, 14)), 0.002, 1.0)
+ROUGHCONDUCTOR = Family("roughconductor", (("distribution", "ggx"), ("material", "none")), (ALPHA,),
+                        ("specular_reflectance",))
+#: Weights of a blend's grid (refined within [0.02, 0.98]).
+WEIGHT = Axis("weight", (0.2, 0.5, 0.8), 0.02, 0.98, log=False)
+
+
+def blend(part0: Family, part1: Family, weight: Axis = WEIGHT) -> Family:
+    """``blendbsdf`` of ``part0`` (``bsdf_0``, weight ``1 - w``) and ``part1`` (``bsdf_1``, weight ``w``):
+    the parts' entries, axes and slots under their prefixes, and the ``weight`` axis.  Its bases are
+    the parts' own (:func:`_basis_now`; Mitsuba's ``blendbsdf`` evaluates ``(1 - w) f_0 + w f_1``),
+    so a grid over both parts costs one Mitsuba point per point of each part.  Axes: ``bsdf_1``'s, the
+    weight, then ``bsdf_0``'s (the refinement goes axis by axis, the lobe first)."""
+    fixed, axes, slots = [], [], []
+    for prefix, f in (("bsdf_0", part0), ("bsdf_1", part1)):
+        fixed += [(f"{prefix}.type", f.type)] + [(f"{prefix}.{k}", v) for k, v in f.fixed]
+        axes += [Axis(f"{prefix}.{a.name}", a.values, a.lo, a.hi, a.log) for a in f.axes]
+        slots += [f"{prefix}.{s}" for s in f.slots]
+    return Family("blendbsdf", tuple(fixed), tuple(axes[len(part0.axes):] + [weight] + axes[:len(part0.axes)]),
+                  tuple(slots), part0.offset or part1.offset, (("bsdf_0", part0), ("bsdf_1", part1)))
+
+
+#: A diffuse base under a smooth-to-rough coat whose index (``int_ior = 1``) is below the outside's
+#: (``ext_ior`` > 1), with ``specular_reflectance = 0``: Mitsuba's ``roughplastic`` weights its diffuse
+#: term by the coat's transmittance at both directions, which vanishes beyond the critical angle
+#: ``asin(1 / ext_ior)`` (total internal reflection, whose reflected light the zero specular colour
+#: discards), so the diffuse albedo falls with incidence, smoothly for a rough coat (measured by
+#: Mitsuba's sampler, white base: ``ext_ior`` 1.2, ``alpha`` 0.3: 0.909, 0.740, 0.404, 0.131 at
+#: 0, 45, 60, 75 degrees; 1.5, 0.3: 0.815, 0.340, 0.124, 0.051 -- about ``cos^2``).  The one Mitsuba
+#: mechanism found whose albedo falls by more than a fifth from 0 to 75 degrees (docs/convert.md).
+TIR_COAT = Family("roughplastic", (("distribution", "ggx"), ("nonlinear", False), ("int_ior", 1.0),
+                                   ("specular_reflectance", 0.0)),
+                  (Axis("ext_ior", (1.15, 1.4, 1.8), 1.02, 3.0), Axis("alpha", (0.15, 0.45), 0.02, 1.0)),
+                  ("diffuse_reflectance",))
 FAMILIES = {
     "diffuse": Family("diffuse", (), (), ("reflectance",)),
-    "roughconductor": Family("roughconductor", (("distribution", "ggx"), ("material", "none")), (ALPHA,),
-                             ("specular_reflectance",)),
+    "roughconductor": ROUGHCONDUCTOR,
     "roughplastic": Family("roughplastic", (("distribution", "ggx"), ("nonlinear", False)), (ALPHA,),
                            ("diffuse_reflectance", "specular_reflectance")),
     "blendbsdf": Family("blendbsdf", (("bsdf_0.type", "diffuse"), ("bsdf_1.type", "roughconductor"),
@@ -149,6 +187,9 @@ FAMILIES = {
                         (Axis("bsdf_1.alpha", ALPHA.values, ALPHA.lo, ALPHA.hi),
                          Axis("weight", (0.2, 0.5, 0.8), 0.02, 0.98, log=False)),
                         ("bsdf_0.reflectance", "bsdf_1.specular_reflectance")),
+    #: a sharp lobe beside a diffuse term that fades with incidence (:data:`TIR_COAT`): for sources whose
+    #: albedo falls (:data:`FALL`), which no family above follows
+    "blendbsdf-tir": blend(TIR_COAT, ROUGHCONDUCTOR),
     "gltf-pbr": Family("gltf-pbr", (),
                        (Axis("roughness", tuple(float(x) for x in np.geomspace(0.06, 1.0, 8)), 0.045, 1.0),
                         Axis("metallic", (0.0, 0.25, 0.5, 0.75, 1.0), 0.0, 1.0, log=False)),
@@ -234,6 +275,16 @@ _PROBES: dict = {}
 def _basis_now(probe: Probe, family: Family, point: dict):
     """``(F, Alb)``: rows ``B_0`` (zero without an offset) and ``B_j``, channel 0 of
     Mitsuba's value at white / zero slots (RGB variants treat channels alike)."""
+    if family.parts:
+        w = float(point["weight"])
+        F, A = [], []
+        for (prefix, part), scale in zip(family.parts, (1.0 - w, w)):
+            sub = {k[len(prefix) + 1:]: v for k, v in point.items() if k.startswith(prefix + ".")}
+            Fp, Ap = basis(probe, part, sub)
+            F.append(scale * Fp)
+            A.append(scale * Ap)
+        return (np.concatenate([[F[0][0] + F[1][0]], F[0][1:], F[1][1:]]),
+                np.concatenate([[A[0][0] + A[1][0]], A[0][1:], A[1][1:]]))
     zero = {s: 0.0 for s in family.slots}
     F0 = A0 = 0.0
     if family.offset:
@@ -368,6 +419,8 @@ class FamilyFit:
     points: int
     #: The figure minimised (the metric's, the albedo weighted, the band's penalty) at the result.
     figure: float = math.inf
+    #: The key of :data:`FAMILIES` (``family`` is the Mitsuba type: ``blendbsdf`` for two of them).
+    key: str = ""
 
 
 def source_target(source, probe, albedo=None):
@@ -429,8 +482,9 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     # 5. measure the loaded result
     fc, alb = probe.measure(_load(d))
     errors = M.errors(np.broadcast_to(fc, g.shape), g, np.broadcast_to(alb, A.shape), A, eps)
+    key = family if isinstance(family, str) else next((k for k, f in FAMILIES.items() if f == fam), fam.type)
     return FamilyFit(fam.type, d, best, {s: [float(v) for v in c] for s, c in colours.items()}, errors, count[0],
-                     figure)
+                     figure, key)
 
 
 def _product(lists):
@@ -478,6 +532,11 @@ def diffuse_albedo(model) -> np.ndarray:
 #: the largest probed incidence has a Fresnel-like rise that a family without Fresnel
 #: (``diffuse``, ``roughconductor``) cannot follow.
 RISE = 0.025
+#: A source whose albedo falls by more than this (any channel) from normal incidence to any
+#: probed incidence is also fitted with ``blendbsdf-tir`` (:data:`TIR_COAT`): every other family's
+#: albedo is flat or rises, or falls by at most a fifth (docs/convert.md), and a flat family
+#: balanced between the ends is off by half the fall.
+FALL = 0.025
 
 
 def candidates(model, albedo) -> tuple[list, str]:
@@ -500,8 +559,13 @@ def candidates(model, albedo) -> tuple[list, str]:
     a = np.asarray(albedo, float)
     a = a.reshape(1, -1) if a.ndim <= 1 else a
     a = np.broadcast_to(a, (a.shape[0], 3))
+    # the fall within the band's incidences (to 75 degrees: every GGX or Beckmann lobe loses a little
+    # beyond, by masking, 0.03 at 85 for cook-torrance:m=0.05)
+    upto = (np.asarray(CONSERVE_THETAS) <= max(REPORT_THETAS)) if len(a) == len(CONSERVE_THETAS) else slice(None)
+    fall = float(np.max(a[0] - a[upto]))
+    tir, why_tir = (["blendbsdf-tir"], f", an albedo falling by {fall:.3g}") if fall > FALL else ([], "")
     if not np.all(np.isfinite(D)) or not hasattr(model, "components"):
-        return ["principled"], "the source declares no diffuse/glossy lobes: the most general family"
+        return ["principled"] + tir, "the source declares no diffuse/glossy lobes: the most general family" + why_tir
     S = np.maximum(a - D, 0.0)
     S0 = S[0]
     rise = float(np.max(a - a[0]))
@@ -510,15 +574,16 @@ def candidates(model, albedo) -> tuple[list, str]:
         return ["diffuse"], f"no specular part (albedo {S.max():.3g} beside a diffuse {D.max():.3g})"
     if D.max() < NONE_BELOW:
         if rising:
-            return (["roughconductor", "roughplastic", "principled"],
-                    f"no diffuse part (specular albedo {S0.max():.3g}), an albedo rising by {rise:.3g} (Fresnel)")
-        return ["roughconductor"], f"no diffuse part (specular albedo {S0.max():.3g})"
+            return (["roughconductor", "roughplastic", "principled"] + tir,
+                    f"no diffuse part (specular albedo {S0.max():.3g}), an albedo rising by {rise:.3g} (Fresnel)"
+                    + why_tir)
+        return ["roughconductor"] + tir, f"no diffuse part (specular albedo {S0.max():.3g})" + why_tir
     plastic = (S0.max() <= PLASTIC_SPECULAR and S0.max() <= 1.1 * S0.min() + 1e-3) or rising
-    return (["diffuse", "blendbsdf"] + (["roughplastic"] if plastic else []) + ["principled"],
+    return (["diffuse", "blendbsdf"] + (["roughplastic"] if plastic else []) + ["principled"] + tir,
             f"a diffuse part ({D.max():.3g}) and a specular one ({S0.max():.3g} at normal incidence"
             + (f", {S.max():.3g} at most" if S.max() > S0.max() + 1e-3 else "") + ")"
             + (f", an albedo rising by {rise:.3g}" if rising else "")
-            + (" within a plastic's coat" if plastic and not rising else ""))
+            + (" within a plastic's coat" if plastic and not rising else "") + why_tir)
 
 
 # -- Mitsuba's own sampler ------------------------------------------------------------------------

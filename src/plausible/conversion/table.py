@@ -136,14 +136,19 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
 
     ``workers``: 0 runs them one after another in this process; ``n >= 1`` in ``n``
     worker processes.  ``limit``: at most this many conversions this run.
-    ``redo``: targets (``"mitsuba:diffuse"``, ...) whose rows made by other code than this
-    (:func:`code_version`) are converted again first (the new row replaces the old one).
+    ``redo``: targets (``"mitsuba:diffuse"``, ...), fit sets (``"ngan2005/ward"``) or materials
+    (``"material:NAME@FIT"``) whose rows made by other code than this (:func:`code_version`) are
+    converted again first, in the order of :func:`jobs` (the new row replaces the old one).
     ``on_row(row)`` is called after each row is written.  Returns every row of ``path``."""
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
     done = read_rows(path)
     redo = set(redo)
-    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and done[key(j)].get("target") in redo
+    def wanted(j):
+        r = done[key(j)]
+        return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
+
+    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and wanted(j)
              and done[key(j)].get("code") != code_version()]
     todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
     if limit is not None:
