@@ -304,11 +304,21 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         families, why = CM.candidates(src.model, src_alb)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
-        family = r.key
         tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
+        if r.band > CM.BAND_HARD:
+            # the band as a constraint of every candidate's fit, the lowest figure of those kept
+            hard = [CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True) for f in families]
+            r = min(hard, key=lambda x: x.figure)
+            tried += (f"; the albedo {min(fits, key=lambda x: x.figure).band:.3f} off at most, beyond "
+                      f"{CM.BAND_HARD}: refitted with the band as a constraint: "
+                      + ", ".join(f"{x.key} {x.figure:.3g} (albedo {x.band:.3f} off)" for x in hard))
+        family = r.key
         notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
     else:
         r = CM.fit_family(src.model, family, metric, probe=probe, target=target)
+        if r.band > CM.BAND_HARD:
+            r = CM.fit_family(src.model, family, metric, probe=probe, target=target, hard=True)
+            notes.append(f"fitted with the band as a constraint (the albedo beyond {CM.BAND_HARD} off without it)")
     textures = dict(src.textures)
     d = _with_textures(r.dict, family, textures, notes)
     tgt_alb = CM.sampler_albedo(r.dict)

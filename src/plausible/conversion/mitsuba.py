@@ -328,25 +328,34 @@ ALBEDO_WEIGHT = 2.0
 BAND, BAND_WEIGHT = 0.02, 50.0
 
 
-def _band(a, A, rows):
+#: The band as a constraint (:func:`fit_family` with ``hard=True``): beyond ``BAND_HARD`` from the
+#: source's albedo at :data:`REPORT_THETAS` (the probe's albedo, within 2e-3 of Mitsuba's sampler; the
+#: Done-when's band is 0.05) each unit costs ``HARD_WEIGHT`` more, an exact penalty: far above what a
+#: unit of albedo is worth to the lobe's figure, so the fit meets the constraint wherever the family can.
+BAND_HARD, HARD_WEIGHT = 0.045, 1000.0
+
+
+def _band(a, A, rows, hard=False):
     if rows is None or a.shape[0] != A.shape[0]:
         return 0.0
-    return BAND_WEIGHT * max(0.0, float(np.max(np.abs(a[rows] - A[rows]))) - BAND)
+    d = float(np.max(np.abs(a[rows] - A[rows])))
+    return BAND_WEIGHT * max(0.0, d - BAND) + (HARD_WEIGHT * max(0.0, d - BAND_HARD) if hard else 0.0)
 
 
-def _figure(metric, F, Alb, x, g, A, eps, rows=None):
+def _figure(metric, F, Alb, x, g, A, eps, rows=None, hard=False):
     a = _predict(Alb, x)
     e = M.errors(_predict(F, x), g, a, A, eps)
     base = e["fcos_max"] + ALBEDO_WEIGHT * e["albedo_max"] if metric == "perceptual" else e[metric]
-    return base + _band(a, A, rows), e
+    return base + _band(a, A, rows, hard), e
 
 
 #: Weight of the albedo rows of the least squares, beyond equal weight of the two sets.
 LSQ_ALBEDO = 10.0
 
 
-def _lsq(F, Alb, g, A, eps, metric):
-    """Colours per channel by bounded linear least squares (step 2); (J, C)."""
+def _lsq(F, Alb, g, A, eps, metric, band=None):
+    """Colours per channel by bounded linear least squares (step 2); (J, C).  ``band``: the rows of
+    ``Alb`` where the albedo is held within :data:`BAND_HARD` of the source's (:func:`_within_band`)."""
     from scipy.optimize import lsq_linear
 
     J, C = F.shape[0] - 1, g.shape[1]
@@ -362,10 +371,42 @@ def _lsq(F, Alb, g, A, eps, metric):
             rows = np.concatenate([F[1:].T * w[:, None], Alb[1:].T * wa[:, None]])
             rhs = np.concatenate([(g[:, c] - F[0]) * w, (A[:, c] - Alb[0]) * wa])
         x[:, c] = lsq_linear(rows, rhs, bounds=(0.0, 1.0)).x
+        if band is not None:
+            x[:, c] = _within_band(rows, rhs, Alb, A[:, c], band, x[:, c])
     return x
 
 
-def _polish(F, Alb, x, g, A, eps, metric, rows=None):
+def _within_band(R, r, Alb, Ac, band, x0):
+    """The colours of one channel minimising ``|R x - r|^2`` on ``[0, 1]`` with the albedo at the
+    incidences ``band`` (rows of ``Alb``) within :data:`BAND_HARD` of ``Ac`` (SLSQP from ``x0``);
+    where no colours meet that, those nearest to it (the linear program of the smallest largest
+    difference).  ``x0`` when it already meets it."""
+    from scipy.optimize import linprog, minimize
+
+    P, q = Alb[1:, band].T, Ac[band] - Alb[0, band]        # albedo at the band rows: P x, target q
+    if np.all(np.abs(P @ x0 - q) <= BAND_HARD):
+        return x0
+    J = len(x0)
+    # min t subject to |P x - q| <= t, 0 <= x <= 1
+    lp = linprog(np.r_[np.zeros(J), 1.0], A_ub=np.block([[P, -np.ones((len(q), 1))], [-P, -np.ones((len(q), 1))]]),
+                 b_ub=np.r_[q, -q], bounds=[(0.0, 1.0)] * J + [(0.0, None)], method="highs")
+    if not lp.success:
+        return x0
+    xf = lp.x[:J]
+    if lp.x[J] > BAND_HARD:
+        return xf
+    tol = BAND_HARD - 1e-6
+    cons = [{"type": "ineq", "fun": lambda x: tol - (P @ x - q), "jac": lambda x: -P},
+            {"type": "ineq", "fun": lambda x: tol + (P @ x - q), "jac": lambda x: P}]
+    scale = max(float(np.sum(r * r)), 1e-30)
+    res = minimize(lambda x: float(np.sum((R @ x - r) ** 2)) / scale, xf,
+                   jac=lambda x: 2.0 * R.T @ (R @ x - r) / scale, method="SLSQP", bounds=[(0.0, 1.0)] * J,
+                   constraints=cons, options=dict(maxiter=200, ftol=1e-12))
+    x = np.clip(res.x, 0.0, 1.0)
+    return x if np.all(np.abs(P @ x - q) <= BAND_HARD) else xf
+
+
+def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False):
     """Step 4 on each channel; the better of ``x`` and the polished point per channel."""
     from scipy.optimize import minimize
 
@@ -376,12 +417,12 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None):
         gc, Ac = g[:, c:c + 1], A[:, c:c + 1]
 
         def true(z):
-            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows)[0]
+            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows, hard)[0]
 
         def smooth(z, beta):
             z = np.clip(z, 0, 1)[:, None]
             c, a = _predict(F, z), _predict(Alb, z)
-            band = _band(a, Ac, rows)
+            band = _band(a, Ac, rows, hard)
             if metric != "perceptual":
                 return M.objective(metric, c, gc, a, Ac, eps, beta=beta) + band
             return (M.objective(metric, c, gc, eps=eps, beta=beta)
@@ -421,6 +462,10 @@ class FamilyFit:
     figure: float = math.inf
     #: The key of :data:`FAMILIES` (``family`` is the Mitsuba type: ``blendbsdf`` for two of them).
     key: str = ""
+    #: The largest albedo difference from the source's at :data:`REPORT_THETAS` (the probe's, loaded result).
+    band: float = math.nan
+    #: Whether the band was a constraint of the fit (``fit_family(hard=True)``).
+    hard: bool = False
 
 
 def source_target(source, probe, albedo=None):
@@ -437,10 +482,14 @@ def source_target(source, probe, albedo=None):
     return g, np.broadcast_to(A, (len(A), 3)).copy()
 
 
-def fit_family(source, family: str | Family, metric: str = "perceptual", *, probe=None, target=None) -> FamilyFit:
+def fit_family(source, family: str | Family, metric: str = "perceptual", *, probe=None, target=None,
+               hard: bool = False) -> FamilyFit:
     """Fit the Mitsuba ``family`` (a key of :data:`FAMILIES`) to the ``source`` model
     under ``metric`` (steps of the module docstring).  ``probe``/``target``: a
-    :class:`Probe` and the source's ``(g, A)`` on it, to reuse across families."""
+    :class:`Probe` and the source's ``(g, A)`` on it, to reuse across families.
+    ``hard``: the band as a constraint -- the colours of every point by least squares within
+    :data:`BAND_HARD` of the source's albedo at :data:`REPORT_THETAS` where the point allows
+    (:func:`_within_band`), and the figure with the exact penalty :data:`HARD_WEIGHT` beyond it."""
     fam = FAMILIES[family] if isinstance(family, str) else family
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
@@ -453,8 +502,8 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     def score(point):
         count[0] += 1
         F, Alb = basis(probe, fam, point)
-        x = _lsq(F, Alb, g, A, eps, metric)
-        return _figure(metric, F, Alb, x, g, A, eps, rows)[0], x
+        x = _lsq(F, Alb, g, A, eps, metric, rows if hard else None)
+        return _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0], x
 
     # 2. scan
     grid = [dict(zip([a.name for a in fam.axes], vals))
@@ -475,16 +524,17 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
             best[ax.name] = ax.inv(float(r.x))
     F, Alb = basis(probe, fam, best)
     # 4. polish the colours
-    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric), g, A, eps, metric, rows)
-    figure = _figure(metric, F, Alb, x, g, A, eps, rows)[0]
+    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard)
+    figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0]
     colours = {s: x[j] for j, s in enumerate(fam.slots)}
     d = fam.bsdf_dict(best, colours)
     # 5. measure the loaded result
     fc, alb = probe.measure(_load(d))
     errors = M.errors(np.broadcast_to(fc, g.shape), g, np.broadcast_to(alb, A.shape), A, eps)
     key = family if isinstance(family, str) else next((k for k, f in FAMILIES.items() if f == fam), fam.type)
+    band = float(np.max(np.abs(np.broadcast_to(alb, A.shape)[rows] - A[rows])))
     return FamilyFit(fam.type, d, best, {s: [float(v) for v in c] for s, c in colours.items()}, errors, count[0],
-                     figure, key)
+                     figure, key, band, hard)
 
 
 def _product(lists):
