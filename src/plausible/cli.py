@@ -611,7 +611,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.argument("source")
 @click.option("--to", "to", required=True, metavar="TARGET",
               help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, blendbsdf, "
-                   "principled), gltf, or a registered model.")
+                   "blendbsdf-tir, principled), gltf, or a registered model.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
                    "or .gltf (with --to gltf).")

@@ -359,3 +359,21 @@ def test_published_fits_whose_albedo_falls_convert_within_the_band(spec):
     c = convert(spec).items[0]
     assert c.params["bsdf_0"]["type"] == "roughplastic"
     assert albedo_check(plausible.make(spec), c.params)[0]
+
+
+def test_textures_go_to_the_coats_base_and_the_lobe_of_blendbsdf_tir(tmp_path):
+    from plausible.conversion import _with_textures, mitsuba_xml
+
+    fam = CM.FAMILIES["blendbsdf-tir"]
+    d = fam.bsdf_dict({"bsdf_1.alpha": 0.05, "weight": 0.4, "bsdf_0.ext_ior": 1.4, "bsdf_0.alpha": 0.3},
+                      {"bsdf_0.diffuse_reflectance": 0.5, "bsdf_1.specular_reflectance": 0.3})
+    notes = []
+    out = _with_textures(d, "blendbsdf-tir", {"map_Kd": "wood.png", "map_Ks": "spec.png"}, notes)
+    assert out["bsdf_0"]["diffuse_reflectance"] == {"type": "bitmap", "filename": "wood.png"}
+    assert out["bsdf_1"]["specular_reflectance"] == {"type": "bitmap", "filename": "spec.png"}
+    assert d["bsdf_0"]["diffuse_reflectance"]["type"] == "rgb" and len(notes) == 2
+    # the XML fragment of the blend (a float texture, a boolean, nested BSDFs) is the same BSDF
+    (tmp_path / "c.xml").write_text(mitsuba_xml({"coat": d}))
+    wi, wo = plausible.direction(0.3, 0.2), plausible.direction(0.5, 2.9)
+    assert np.allclose(MitsubaBSDF(load_bsdf_xml(str(tmp_path / "c.xml"), "coat")).eval(wi, wo),
+                       MitsubaBSDF(mi.load_dict(d)).eval(wi, wo), rtol=1e-6)

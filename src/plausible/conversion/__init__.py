@@ -9,10 +9,12 @@ name) or a Wavefront ``.mtl`` file (every ``newmtl``; :mod:`.mtl`) -- as
 plausible models, and fits a *target* to each:
 
 * ``"mitsuba"``: one of Mitsuba's ``diffuse``, ``roughconductor``,
-  ``roughplastic``, ``blendbsdf`` (diffuse + roughconductor), ``principled`` per
-  material, the best of the candidates (:func:`.mitsuba.candidates`) by the figure
-  minimised, or ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code
-  (:func:`.mitsuba.fit_family`);
+  ``roughplastic``, ``blendbsdf`` (diffuse + roughconductor), ``blendbsdf-tir``
+  (a ``blendbsdf`` of a roughconductor and a diffuse base under a coat of lower index
+  than outside, whose albedo falls with incidence), ``principled`` per material, the
+  best of the candidates (:func:`.mitsuba.candidates`) by the figure minimised --
+  refitted with the albedo band as a constraint where the best misses it -- or
+  ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code (:func:`.mitsuba.fit_family`);
 * ``"gltf"``: the glTF 2.0 metallic-roughness material, the registered model
   ``gltf-pbr`` fitted the same way, written by :func:`plausible.export.gltf.write_gltf`
   (refused with a message where that model is not installed);
@@ -257,7 +259,8 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     """Convert every material of ``source`` to ``to`` under ``metric`` (module docstring).
 
     ``to``: ``"mitsuba"``, ``"mitsuba:TYPE"`` (``diffuse``, ``roughconductor``,
-    ``roughplastic``, ``blendbsdf``, ``principled``), ``"gltf"``, or a registered model's name.
+    ``roughplastic``, ``blendbsdf``, ``blendbsdf-tir``, ``principled``), ``"gltf"``, or a
+    registered model's name.
     ``metric``: one of :data:`plausible.fitting.metrics.METRICS` (the perceptual
     metric, default, fits lobe and albedo together).  ``starts``: optimiser
     starts of a registered-model fit.  Returns a :class:`Conversion`.

@@ -15,7 +15,8 @@ with ``B_0`` Mitsuba's value with every slot 0 (zero unless the family has an
 times factors free of it, the coat ``specular_reflectance`` times its lobe;
 ``principled``: ``base_color`` enters the diffuse term and the metallic Schlick
 Fresnel linearly; ``blendbsdf``: ``(1 - weight)`` times a ``diffuse`` plus ``weight``
-times a ``roughconductor``, each linear in its colour; ``gltf-pbr``: see
+times a ``roughconductor``, each linear in its colour (``blendbsdf-tir`` likewise, of a
+``roughplastic`` with ``nonlinear = false`` and a ``roughconductor``: :func:`blend`); ``gltf-pbr``: see
 :data:`PLAUSIBLE_TYPES`; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
 on Mitsuba at random colours, and that it fails for ``nonlinear = true``).
 So the fit needs Mitsuba only per axis point: the bases are Mitsuba's values
@@ -42,6 +43,9 @@ NumPy.  The steps (:func:`fit_family`):
 5. **Measure** the result as loaded from its dict: every metric through Mitsuba
    again, and the albedo at 0, 45 and 75 degrees by Mitsuba's own sampler
    (:func:`sampler_albedo`).
+
+With ``hard=True`` the albedo band is a constraint of steps 2-4 (:data:`BAND_HARD`):
+:func:`plausible.conversion.convert` refits so where the best candidate misses it.
 """
 
 from __future__ import annotations
@@ -600,7 +604,9 @@ def candidates(model, albedo) -> tuple[list, str]:
     :data:`RISE` from normal incidence; else ``diffuse``, ``blendbsdf`` (a diffuse and a
     ``roughconductor`` without Fresnel, the composition of the published fits), ``roughplastic``
     when ``S <= 0.04`` at normal incidence and grey (channels within 10 %) or the albedo rises,
-    and ``principled``; ``principled`` for a source that declares no lobes.  (Decided at normal
+    and ``principled``; ``principled`` for a source that declares no lobes; and besides, for a
+    source whose albedo falls by more than :data:`FALL` from normal incidence to any incidence up
+    to 75 degrees (given the incidences), ``blendbsdf-tir``.  (Decided at normal
     incidence alone, a published fit with a dielectric Fresnel, ``chrome@low2012/cook-torrance-e2``,
     albedo 0.082 at 0 degrees and 0.287 at 75, was given ``roughconductor`` alone and missed by 0.10
     at both ends; ``colonial-maple-223@ngan2005/cook-torrance``, a specular 0.002 at normal incidence
