@@ -57,6 +57,36 @@ def test_unit_lanes_is_normalise_and_its_checks():
 
 
 @needs_drjit
+def test_unit_lanes_on_drjit_mixes_kept_and_normalised_rows():
+    """On Dr.Jit, :func:`D.unit_lanes` skips the divisions for packets of unit rows
+    (``ops.keep_or``): a batch whose runs of unit rows and of rows to normalise
+    (lengths 1 to 64, so packets are all kept, all normalised, or mixed) gives
+    bitwise NumPy's ``normalise`` in every row, the unit rows as given."""
+    import drjit as dr
+    from drjit.llvm import Float64
+
+    from plausible.arrays.ops import drjit_ops
+
+    rng = np.random.default_rng(11)
+    a = D.normalise(random_upper(rng, 3000))
+    unit = np.abs(D.norm2(a) - 1.0) <= D.UNIT_TOL        # all, before the runs are stretched
+    lengths = rng.integers(1, 65, 200)
+    a[np.resize(np.repeat(np.arange(len(lengths)) % 2 == 1, lengths), len(a))] *= 2.5
+    a[5] *= 1e200
+    a[6] *= 1e-170
+    ops = drjit_ops(Float64)
+    got, bad = D.unit_lanes(ops, tuple(Float64(np.ascontiguousarray(a[:, k])) for k in range(3)))
+    dr.eval(got, bad)
+    got = np.stack([g.numpy() for g in got], axis=-1)
+    np.testing.assert_array_equal(got, D.normalise(a))
+    with np.errstate(over="ignore", under="ignore"):
+        kept = np.abs(D.norm2(a) - 1.0) <= D.UNIT_TOL
+    assert 0 < kept.sum() < len(a) - 100 and np.all(unit[kept])
+    np.testing.assert_array_equal(got[kept], a[kept])
+    assert not np.any(bad.numpy())
+
+
+@needs_drjit
 @pytest.mark.parametrize("spec", SPECS, ids=[s.split(":")[0] for s in SPECS])
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_raw_input_gives_the_result_of_numpy_normalised_input(spec, dtype, rng):

@@ -19,6 +19,12 @@ The namespaces smooth over the differences that bite (measured with Dr.Jit 1.5):
 * ``table(values)`` turns a 1-D sequence of constants into the backend's
   array and ``gather(table, index)`` reads it at whole-number float indices
   (tabulated functions, e.g. the albedo of :mod:`plausible.models.pumped_up`).
+* ``keep_or(keep, c, fn)`` is the components ``c`` where ``keep`` and those of
+  ``fn(*c)`` elsewhere: ``where`` for each component, except that Dr.Jit runs
+  ``fn`` in a symbolic conditional (``dr.if_stmt``), which its LLVM backend
+  skips for every packet of lanes that are all kept (NumPy evaluates ``fn``
+  everywhere).  For a rare, costly branch: the normalisation of rows that are
+  not unit already (:func:`plausible.directions.unit_lanes`).
 * ``log1p`` exists in NumPy but not in Dr.Jit; the Dr.Jit version uses the
   classic compensated formula ``log(u) * x / (u - 1)`` with ``u = 1 + x``.
 """
@@ -42,6 +48,10 @@ def _np_select(cond, a, b):
     return np.where(cond, a, b)
 
 
+def _np_keep_or(keep, c, fn):
+    return tuple(np.where(keep, x, y) for x, y in zip(c, fn(*c)))
+
+
 def _np_table(values):
     return np.ascontiguousarray(values, dtype=np.float64)
 
@@ -58,6 +68,7 @@ NP = SimpleNamespace(
     log1p=np.log1p,
     power=_np_power,
     where=_np_select,
+    keep_or=_np_keep_or,
     maximum=np.maximum,
     minimum=np.minimum,
     abs=np.abs,
@@ -104,6 +115,11 @@ def drjit_ops(float_type=None) -> SimpleNamespace:
             a = float_type(a)
         return dr.select(cond, a, b)
 
+    def keep_or(keep, c, fn):
+        # fn only where a lane of the packet is not kept; both branches return the
+        # same types (Python numbers would make the merge fail)
+        return tuple(dr.if_stmt(tuple(c), ~keep, lambda *a: tuple(fn(*a)), lambda *a: a))
+
     def table(values):
         # a 1-D table of constants for :func:`gather` (float_type, else Float64 of LLVM)
         t = float_type if float_type is not None else dr.llvm.Float64
@@ -123,6 +139,7 @@ def drjit_ops(float_type=None) -> SimpleNamespace:
         log1p=log1p,
         power=power,
         where=where,
+        keep_or=keep_or,
         maximum=dr.maximum,
         minimum=dr.minimum,
         abs=dr.abs,
