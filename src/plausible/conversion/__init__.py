@@ -308,6 +308,14 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
         tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
+        others = [x for x in fits if x.key not in CM.BAND_FAMILIES]
+        if r.key in CM.BAND_FAMILIES and others:
+            # kept only where the band needs it or the metric's own figure is lower too
+            o = min(others, key=lambda x: x.figure)
+            if o.band <= CM.BAND_HARD and o.errors[metric] <= r.errors[metric]:
+                tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
+                          f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
+                r = o
         if r.band > CM.BAND_HARD:
             # the band as a constraint of every candidate's fit, the lowest figure of those kept
             hard = [CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True) for f in families]

@@ -150,6 +150,11 @@ PLAUSIBLE_TYPES = ("gltf-pbr",)
 ALPHA = Axis("alpha", tuple(float(x) for x in np.geomspace(0.004, 1.0, 14)), 0.002, 1.0)
 ROUGHCONDUCTOR = Family("roughconductor", (("distribution", "ggx"), ("material", "none")), (ALPHA,),
                         ("specular_reflectance",))
+#: Families chosen (:func:`plausible.conversion.convert`) over the best of the others only where that
+#: one misses the band (:data:`BAND_HARD`) or has the higher figure of the metric itself: ``blendbsdf-tir``
+#: moves part of a sharp lobe's energy into a diffuse term, which the figure minimised (the albedo twice,
+#: the band's cost) may prefer to a lobe closer to the source's.
+BAND_FAMILIES = ("blendbsdf-tir",)
 #: Weights of a blend's grid (refined within [0.02, 0.98]).
 WEIGHT = Axis("weight", (0.2, 0.5, 0.8), 0.02, 0.98, log=False)
 
