@@ -59,6 +59,12 @@ def test_the_summary_counts_the_rows_within_the_band(tmp_path):
     assert (s["n"], s["within"], s["conserving"], s["worst"]) == (4, 2, 3, 0.2)
     md = table.markdown(rows)
     assert "| s | 4 | 2 / 3 |" in md and "no (source not conserving)" in md
+    # a blendbsdf whose bsdf_0 is a roughplastic is the coat's blend; one of a diffuse is not
+    coat = {**_fake_row(("mitsuba", "s", "coat")), "target": "mitsuba:blendbsdf",
+            "params": {"type": "blendbsdf", "bsdf_0": {"type": "roughplastic"}}}
+    plain = {**coat, "material": "plain", "params": {"type": "blendbsdf", "bsdf_0": {"type": "diffuse"}}}
+    md = table.markdown({table.key(coat): coat, table.key(plain): plain})
+    assert "| s | coat | blendbsdf-tir |" in md and "| s | plain | blendbsdf |" in md
     assert json.loads(json.dumps(rows)) == rows
 
 
