@@ -51,6 +51,34 @@ def test_numpy_and_drjit_front_ends_agree(name, kw, rng):
     assert_rel(b.weight, a.weight, 1e-10)
 
 
+@needs_drjit
+def test_eager_sends_calls_of_eager_min_rows_to_drjit_whatever_ran_before():
+    """``eager`` (what ``check`` runs in): a structure not yet compiled goes to Dr.Jit from
+    ``EAGER_MIN_ROWS`` pairs, not ``AUTO_MIN_NEW``; smaller calls and explicit requests
+    are as outside; and the compiled sampler gives what NumPy's gives."""
+    class Fresh(type(plausible.make("ward"))):
+        pass
+
+    m = Fresh(alpha_x=0.123, alpha_y=0.234)
+    n = backend.EAGER_MIN_ROWS
+    assert backend.AUTO_MIN_ROWS <= backend.AUTO_MIN_NEW and n < backend.AUTO_MIN_NEW
+    with backend.eager():
+        assert backend.choose(n - 1, m, kernel="sample") == "numpy"
+        assert backend.choose(n, m, kernel="sample") == "drjit"
+        assert backend.choose(n, m, kernel="pdf") == "drjit"
+        with backend.use("numpy"):
+            assert backend.choose(10 ** 7, m) == "numpy"
+    assert backend.choose(backend.AUTO_MIN_ROWS, Fresh(alpha_x=0.2), kernel="eval") == "numpy"
+    rng = np.random.default_rng(5)
+    wi, u = random_upper(rng, n), rng.random((n, 3))
+    with backend.eager(), backend.kernel_log() as log:
+        s = m.sample(wi, u)
+    assert log["launched"] >= 1
+    ref = m.sample(wi, u, backend="numpy")
+    np.testing.assert_allclose(s.wo, ref.wo, rtol=0, atol=1e-12)
+    assert_rel(s.weight, ref.weight, 1e-10)
+
+
 def test_request_rule_keyword_then_context_then_environment(monkeypatch):
     monkeypatch.setenv(backend.ENV, "numpy")
     assert backend.requested() == "numpy"

@@ -128,12 +128,13 @@ def unit_lanes(ops, c):
 
 
 def _unit_rows(ops, c):
-    """The normalisation of :func:`unit_lanes` for rows that may not be unit."""
+    """The normalisation of :func:`unit_lanes` for rows that may not be unit; the
+    rescaling by the largest component runs only where ``|c|^2`` under- or
+    overflows (``ops.keep_or``; never for float32 input, whose squares stay in range)."""
     x, y, z = c
     s = x * x + y * y + z * z
     safe = safe_norm2(s)
-    m = ops.where(safe, 1.0, max_abs(ops, c))
-    t = tuple(v / m for v in c)
+    t = ops.keep_or(safe, c, lambda *v: tuple(q / max_abs(ops, v) for q in v))
     tx, ty, tz = t
     return unit_components(ops, t, ops.where(safe, s, tx * tx + ty * ty + tz * tz), keep=safe)
 

@@ -189,3 +189,15 @@ def test_check_report_names_failures_for_phong():
     assert not rep.passed
     assert not rep["reciprocity"].passed and not rep["energy"].passed
     assert rep["sampling"].passed and rep["chi2"].passed
+
+
+@pytest.mark.parametrize("cls,fails", [(Asymmetric, "reciprocity"), (OverBright, "energy"),
+                                       (PdfOffBy10, "sampling"), (WrongExponentSampler, "chi2"),
+                                       (DropsQuadrant, "chi2"), (BadWeight, "sampling")])
+def test_quick_check_catches_every_broken_model(cls, fails):
+    """``check(quick=True)`` (its samples on the compiled kernels where Dr.Jit is there,
+    its albedos to ``QUICK_ALBEDO_TOL``) fails each broken model on the property it breaks,
+    and passes the model they break."""
+    rep = plausible.check(make(cls, n=30), quick=True)
+    assert not rep[fails].passed and not rep.passed, str(rep)
+    assert plausible.check(plausible.make("reciprocal-phong", n=30), quick=True).passed

@@ -54,3 +54,21 @@ def test_a_plausible_material_passes_and_the_summary_counts_it(row):
     assert ok.reciprocal and not ok.gains_energy
     s = summary([row, ok])
     assert [x["n"] for x in s] == [1, 1]
+
+
+def test_a_diffuse_part_takes_its_closed_form_and_agrees_with_the_quadrature():
+    """The Lambertian part of a fit is not integrated: its declared albedo (``rd``)
+    is used, which the quadrature of ``f cos`` confirms at every angle of the grid;
+    a part with a glossy lobe has no closed form and is integrated."""
+    from plausible.analysis.materials import THETAS_DEG, closed_form_albedo
+
+    m = plausible.material("nickel", "ngan2005/ward")
+    lam, ward = m.parts
+    exact = closed_form_albedo(lam)
+    assert exact is not None and closed_form_albedo(ward) is None
+    for t in THETAS_DEG:
+        wi = direction(math.radians(t), 0.0)
+        got, ref = exact(wi), plausible.albedo(lam, wi)
+        np.testing.assert_allclose(got.value, ref.value, rtol=0, atol=1e-6)
+        np.testing.assert_array_equal(got.value, np.asarray(lam.params["rd"], dtype=np.float64))
+    assert np.all(exact(np.array([0.6, 0.0, -0.8])).value == 0.0)

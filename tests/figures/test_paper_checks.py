@@ -265,3 +265,26 @@ def test_a_curve_that_badly_decreases_passes_and_one_that_diverges_fails():
     for label in ("Phong (n = 150)", "He-Torrance (sigma0 = 0.1, tau = 1.7)"):
         assert all(_ok(q) for q in rate_checks(label, falling, TH, 0.004 * c ** 0.075))
         assert not all(_ok(q) for q in rate_checks(label, falling, TH, 0.004 / np.sqrt(c)))
+
+
+# -- A-S fig. 7: the RMSE of a render without a reference ---------------------------------
+
+def test_rmse_from_pair_recovers_the_noise_of_two_independent_renders():
+    """Two 'renders' = a fixed image + independent Gaussian noise of known sigma (the
+    closed form: RMSE against the expectation = sigma); a noisy 'reference' reads
+    sqrt(1 + 1/k) times too high, the pair does not."""
+    from plausible.figures.paper_as import rmse_from_pair
+
+    rng = np.random.default_rng(3)
+    mean = rng.uniform(0.0, 2.0, size=(200, 200, 3))
+    sigma = 0.3
+    a, b = (mean + sigma * rng.standard_normal(mean.shape) for _ in range(2))
+    rmse, se = rmse_from_pair(a, b)
+    assert abs(rmse - sigma) <= 4 * se
+    assert se < 0.01 * sigma
+    ref = mean + sigma / 2 * rng.standard_normal(mean.shape)       # a reference with 4x the samples
+    old = float(np.sqrt(np.mean((a - ref) ** 2)))
+    assert abs(old - sigma * np.sqrt(1.25)) <= 4 * se * np.sqrt(1.25)
+    assert old - rmse > 20 * se                                       # the reference's noise shows
+    # the same render twice is no pair: its noise cancels (zero), which the estimate must not hide
+    assert rmse_from_pair(a, a) == (0.0, 0.0)

@@ -197,3 +197,24 @@ def test_a_follower_is_made_by_the_worker_that_made_its_leader(monkeypatch):
     assert report._next([], busy=set()) is None
     monkeypatch.setattr(report, "FOLLOWS", {})
     assert report._next([("b", 1), ("a", 2)], busy=set()) == 0   # no leaders: the order as given
+
+
+def _blas_env(ctx):
+    ctx.steps(1)
+    ctx.json("env", {"OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS")})
+    ctx.tick()
+
+
+def test_workers_get_one_blas_thread_unless_the_caller_set_it(tmp_path, monkeypatch):
+    """The worker processes share the cores: each gets OPENBLAS_NUM_THREADS = 1 (report.WORKER_ENV),
+    a value the caller set wins, and the parent's environment is left as it was."""
+    monkeypatch.setitem(F.FIGURES, "blas", F.Figure("blas", "Blas", "test", "caption", _blas_env, {}))
+    monkeypatch.setitem(F.FIGURES, "blas2", F.Figure("blas2", "Blas", "test", "caption", _blas_env, {}))
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    seen = lambda d, n: json.loads((d / n / "env.json").read_text())["OPENBLAS_NUM_THREADS"]   # noqa: E731
+    run(tmp_path / "a", only=["blas", "blas2"], jobs=2)
+    assert seen(tmp_path / "a", "blas") == seen(tmp_path / "a", "blas2") == "1"
+    assert "OPENBLAS_NUM_THREADS" not in os.environ
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    run(tmp_path / "b", only=["blas", "blas2"], jobs=2)
+    assert seen(tmp_path / "b", "blas") == "2" and os.environ["OPENBLAS_NUM_THREADS"] == "2"

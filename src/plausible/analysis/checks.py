@@ -101,6 +101,12 @@ def energy_directions(model, thetas_deg=ENERGY_THETAS, phis_deg=None):
     return [(t, p) for p in phis_deg for t in thetas_deg]
 
 
+#: The error bound to which ``check(quick=True)`` integrates the albedos of its energy and
+#: sampling checks: ten times below the energy check's margin ``tol = 1e-4`` (the
+#: bound of ``check --materials --quick``, :data:`plausible.analysis.materials.QUICK_TOL`); the full
+#: check keeps :data:`plausible.integrals.albedo.TOL`.
+QUICK_ALBEDO_TOL = 1e-5
+
 #: Samples per incidence of the sampler's Monte Carlo albedo that guards :func:`energy`.
 GUARD_SAMPLES = 1 << 12
 #: Standard errors within which the guard and the quadrature agree.

@@ -9,10 +9,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .adapters import as_bxdf, tolerances
-from ..integrals.albedo import albedos, direction, is_isotropic, pdf_integrals
+from ..arrays.backend import eager
+from ..integrals.albedo import TOL as ALBEDO_TOL, albedos, direction, is_isotropic, pdf_integrals
 from ..progress import start, within
 from ..text import jsonable
-from .checks import (ENERGY_THETAS, PropertyResult, energy, energy_directions, grazing_thetas, reciprocity,
+from .checks import (ENERGY_THETAS, QUICK_ALBEDO_TOL, PropertyResult, energy, energy_directions, grazing_thetas, reciprocity,
                      sampling_consistency)
 from .chi2 import chi2_many
 
@@ -149,7 +150,8 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     rep = CheckReport(model.name, jsonable(model.params), notes=list(getattr(model, "notes", [])))
     ticks = _split_progress(progress, len(views))
     for label, m in views:
-        sub = _check_one(m, alpha=alpha, n_samples=n_samples, quick=quick, progress=ticks)
+        with eager():   # the checks' sample, eval and pdf calls on the compiled kernels (see eager)
+            sub = _check_one(m, alpha=alpha, n_samples=n_samples, quick=quick, progress=ticks)
         for r in sub.results:
             r.name += f" [{label}]" if label else ""
         rep.results += sub.results
@@ -175,12 +177,12 @@ def _split_progress(progress, n_views):
     return factory
 
 
-def _albedos_of(model, wis) -> list:
-    """:func:`~plausible.integrals.albedo.albedos` of ``wis``, each distinct incidence
-    integrated once (all in one refinement)."""
+def _albedos_of(model, wis, tol) -> list:
+    """:func:`~plausible.integrals.albedo.albedos` of ``wis`` to the error bound ``tol``,
+    each distinct incidence integrated once (all in one refinement)."""
     keys = [tuple(np.asarray(w, dtype=np.float64)) for w in wis]
     distinct = list(dict.fromkeys(keys))
-    res = dict(zip(distinct, albedos(model, [np.array(k) for k in distinct]))) if distinct else {}
+    res = dict(zip(distinct, albedos(model, [np.array(k) for k in distinct], tol=tol))) if distinct else {}
     return [res[k] for k in keys]
 
 
@@ -210,7 +212,7 @@ def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
     s_wis = ([direction(math.radians(t), math.radians(p))
               for p in ((0,) if is_isotropic(model) else s_phis) for t in s_thetas]
              if "sampling" not in skip else [])
-    shared = _albedos_of(model, e_wis + s_wis)
+    shared = _albedos_of(model, e_wis + s_wis, QUICK_ALBEDO_TOL if quick else ALBEDO_TOL)
     if "energy" in skip:
         rep.results.append(not_applicable("energy", skip["energy"]))
         tick(len(e_dirs))

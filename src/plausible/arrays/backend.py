@@ -69,6 +69,9 @@ AUTO_MIN_NODES = 1 << 14
 #: on Dr.Jit in this process; before that ``auto`` asks for this many, where NumPy
 #: takes longer than compiling a kernel.
 AUTO_MIN_NEW = 1 << 18
+#: Within :func:`eager`, ``auto`` uses Dr.Jit from this many pairs (or nodes), whether
+#: or not the model structure has run on Dr.Jit before in this process.
+EAGER_MIN_ROWS = 1 << 14
 
 _REQUEST: contextvars.ContextVar = contextvars.ContextVar("plausible_backend", default=None)
 #: ``(kernel, kernel_key(model))`` of the models ``auto`` has sent to Dr.Jit (compiled).
@@ -78,6 +81,8 @@ _NUMPY_ONLY: weakref.WeakSet = weakref.WeakSet()
 #: Structure keys (:func:`plausible.kernel_params.structure`) whose hooks failed
 #: with their parameters as kernel data: they run with constants from then on.
 _CONSTANTS: set = set()
+#: Whether :func:`eager` is in force.
+_EAGER: contextvars.ContextVar = contextvars.ContextVar("plausible_eager", default=False)
 #: Whether the Dr.Jit call in progress passes parameters as data (set by :func:`run`).
 _AS_DATA: contextvars.ContextVar = contextvars.ContextVar("plausible_params_as_data", default=True)
 
@@ -120,6 +125,23 @@ def use(backend: str):
         _REQUEST.reset(token)
 
 
+@contextlib.contextmanager
+def eager():
+    """Within this block, ``auto`` sends every call of at least :data:`EAGER_MIN_ROWS`
+    pairs (or quadrature nodes) to Dr.Jit, compiling the model structure's kernel if
+    this process has not yet (rule 2's :data:`AUTO_MIN_NEW` does not apply): for work
+    that makes many calls of that size on one structure, such as
+    :func:`plausible.check` (its sampling, guard and chi-square samples, 30,000 to
+    200,000 pairs a call), where NumPy's float64 arithmetic costs more than the
+    kernels, and the choice then depends on the call alone, not on what ran before.
+    An explicit request (``"numpy"``, ``"drjit"``) is obeyed as outside."""
+    token = _EAGER.set(True)
+    try:
+        yield
+    finally:
+        _EAGER.reset(token)
+
+
 @lru_cache(maxsize=None)
 def drjit_available() -> bool:
     """Dr.Jit is importable and its LLVM backend runs (libLLVM found)."""
@@ -150,7 +172,9 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
                              f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
         return "drjit"
     key = None if model is None else (kernel, kernel_key(model))
-    if key is not None and key not in _TRACED:
+    if _EAGER.get():
+        min_rows = min(min_rows, EAGER_MIN_ROWS)
+    elif key is not None and key not in _TRACED:
         min_rows = max(min_rows, AUTO_MIN_NEW)
     if rows >= min_rows and drjit_available():
         if key is not None:

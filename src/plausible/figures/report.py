@@ -23,6 +23,7 @@ import shutil
 import tempfile
 import time
 import traceback
+from contextlib import contextmanager
 from pathlib import Path
 
 from rich.console import Console
@@ -274,6 +275,25 @@ def _expected_seconds(out: Path, name: str) -> float:
         return float(EXPECTED_SECONDS.get(name, 1.0))
 
 
+#: Environment variables of the worker processes, where not set already: one BLAS thread
+#: each.  The workers share the cores, and OpenBLAS's threads wait for work by spinning:
+#: ``numpy.polynomial.legendre.leggauss(256)`` (one small eigenvalue problem) took 0.50
+#: CPU-s with two threads and 0.009 with one.
+WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1"}
+
+
+@contextmanager
+def _environment(values: dict):
+    """``os.environ`` with ``values`` added where unset, within the block."""
+    added = [k for k in values if k not in os.environ]
+    os.environ.update({k: values[k] for k in added})
+    try:
+        yield
+    finally:
+        for k in added:
+            os.environ.pop(k, None)
+
+
 def _worker(conn, out, resolution, spp, quick):
     """A worker process: make each figure ``(Figure, key)`` the parent sends on the
     pipe ``conn`` until it sends None.  Progress and results go back on the same
@@ -324,7 +344,8 @@ def _run_parallel(out, make, results, *, jobs, resolution, spp, quick, console, 
     def spawn():
         mine, theirs = ctx.Pipe()
         p = ctx.Process(target=_worker, args=(theirs, str(out), resolution, spp, quick), daemon=True)
-        p.start()
+        with _environment(WORKER_ENV):     # a spawned interpreter reads it when NumPy loads
+            p.start()
         theirs.close()
         workers[mine] = [p, None, {}]
         feed(mine)

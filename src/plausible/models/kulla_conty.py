@@ -45,6 +45,7 @@ from .. import fresnel, vec, warps
 from ..bxdf import BxDF
 from ..integrals.albedo import hemispherical_albedo
 from ..integrals.cache import albedo_table_of, horizon_albedos
+from ..integrals.quadrature import gauss_legendre
 from ..arrays.ops import INV_PI, NP
 from ..params import ModelParam, Param
 from ..registry import register
@@ -104,7 +105,7 @@ def table_average(table, fn=lambda v: v) -> float:
     """``(1/pi) int fn(table(w)) cos dw`` of an :class:`~plausible.tables.AngleTable` read as
     its interpolant (Gauss-Legendre in ``mu`` with :data:`AVG_NODES` nodes, :data:`AVG_PHIS`
     azimuths for a 2-D table)."""
-    x, w = np.polynomial.legendre.leggauss(AVG_NODES)
+    x, w = gauss_legendre(AVG_NODES)     # computed once per process (an eigenvalue problem of size 256)
     mu, wm = 0.5 * (x + 1.0), 0.5 * w
     thetas = np.arccos(mu)
     if table.isotropic:
