@@ -104,13 +104,19 @@ class _Rules:
         cut = getattr(model, "mirror_cut", None)
         self.lune = bool(cut()) if callable(cut) else False
         self._breaks = {}
+        self._nodes = {}
         self.sums = {}
 
     def nodes(self, m, refine):
         """``(s, ws, phi, wp, t0, span)``: the nodes and weights in ``s`` and ``phi``
         and the polar range ``[t0, t0 + span]`` of each azimuth node (the node of
         ``(s, phi)`` is the half vector at polar angle ``t0 + s span``; see
-        :func:`_grid_sum`)."""
+        :func:`_grid_sum`).  Computed once per ``(m, refine)`` (callers only read them)."""
+        if (m, refine) not in self._nodes:
+            self._nodes[(m, refine)] = self._make_nodes(m, refine)
+        return self._nodes[(m, refine)]
+
+    def _make_nodes(self, m, refine):
         if refine not in self._breaks:
             self._breaks[refine] = half_vector_breaks(self.wi, self.model.peak_directions(self.wi),
                                                       self.levels, refine, axes=self.axes, lune=self.lune)
