@@ -364,7 +364,8 @@ def test_check_all_quick_jobs(benchmark, jobs):
 
     n = len(json.loads(r.stdout)) if r.stdout.strip().startswith("[") else -1
     record(benchmark, "issue-30", f"plausible check --all --quick --jobs {jobs}", backend="auto", op="check", n=n,
-           wall_s=wall, cpu_s=cpus, status=r.returncode, load=load())
+           wall_s=wall, cpu_s=cpus, status=r.returncode, load=load(),
+           **(dict(stderr=r.stderr[-2000:]) if r.returncode else {}))
     benchmark.pedantic(lambda: None, rounds=1, iterations=1)
 
 

@@ -611,7 +611,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.argument("source")
 @click.option("--to", "to", required=True, metavar="TARGET",
               help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, blendbsdf, "
-                   "principled), gltf, or a registered model.")
+                   "blendbsdf-tir, principled), gltf, or a registered model.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
                    "or .gltf (with --to gltf).")
@@ -661,8 +661,9 @@ def convert_cmd(source, to, out, metric, as_json):
               help="Worker processes (0: one conversion after another in this process).")
 @click.option("--markdown", "md", type=click.Path(dir_okay=False), metavar="FILE.md",
               help="Write the table (summary per fit set, every row) from every row of --out.")
-@click.option("--redo-target", "redo", metavar="A,B",
-              help="Convert again first the rows of these targets (mitsuba:diffuse, ...) made by other code.")
+@click.option("--redo", "--redo-target", "redo", metavar="A,B",
+              help="Convert again first the rows of these targets (mitsuba:diffuse, ...), fit sets (ngan2005/ward) "
+                   "or materials (material:NAME@FIT) made by other code.")
 def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
     """Convert every published fit (material:NAME@FIT) to each target, resumably (docs/convert.md).
 

@@ -70,3 +70,30 @@ def test_bad_input():
     with pytest.raises(ValueError, match="wi must be a float array.*'up'"):
         albedo(m, "up")
     assert albedo(m, [0, 0, -1]).value == 0
+
+
+@pytest.mark.parametrize("spec", ["ashikhmin-shirley:nu=11:nv=301", "phong:n=0", "cook-torrance:m=0.2:rs=0.6,0.5,0.4"])
+@pytest.mark.parametrize("backend_name", ["numpy", "drjit"])
+def test_rule_pairs_sharing_nodes_sum_as_the_whole_grids(spec, backend_name):
+    """A pair of rules ``(m, r)``, ``(m, 2 r)`` asked together is computed from the nodes
+    they share plus each one's others (``_pieces``); the sums equal those of each rule's
+    whole grid (a second computation: ``_grid_sum`` of the full grid, NumPy) to rounding,
+    for an anisotropic lobe, a lune-cut lobe (two polar segments) and a colour model; and
+    the pieces hold fewer nodes than the two grids."""
+    from plausible.arrays import backend
+    from plausible.integrals.albedo import _grid_sum, _pieces, _Rules, _sums
+
+    if backend_name == "drjit" and not backend.drjit_available():
+        pytest.skip("Dr.Jit LLVM backend unavailable")
+    m = plausible.make(spec)
+    wis = [direction(math.radians(t), math.radians(p)) for t, p in ((0, 0), (60, 30), (89.9, 10))]
+    rules = [_Rules(m, wi, 13, not is_isotropic(m)) for wi in wis]
+    requests = [(a, 6, r) for a in range(len(wis)) for r in (1, 2)]
+    pieces, _ = _pieces(rules, requests)
+    whole = sum(len(rules[a].nodes(k, r)[0]) * len(rules[a].nodes(k, r)[2]) for a, k, r in requests)
+    assert sum(len(g[0]) * len(g[2]) for _, g in pieces) < 0.9 * whole
+    with plausible.use_backend(backend_name):
+        _sums(m, "f", rules, requests)
+    for a, k, r in requests:
+        ref = _grid_sum(m, "f", wis[a], rules[a].nodes(k, r))
+        np.testing.assert_allclose(rules[a].sums[(k, r)], ref, rtol=1e-12, atol=0)

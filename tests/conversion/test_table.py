@@ -59,6 +59,12 @@ def test_the_summary_counts_the_rows_within_the_band(tmp_path):
     assert (s["n"], s["within"], s["conserving"], s["worst"]) == (4, 2, 3, 0.2)
     md = table.markdown(rows)
     assert "| s | 4 | 2 / 3 |" in md and "no (source not conserving)" in md
+    # a blendbsdf whose bsdf_0 is a roughplastic is the coat's blend; one of a diffuse is not
+    coat = {**_fake_row(("mitsuba", "s", "coat")), "target": "mitsuba:blendbsdf",
+            "params": {"type": "blendbsdf", "bsdf_0": {"type": "roughplastic"}}}
+    plain = {**coat, "material": "plain", "params": {"type": "blendbsdf", "bsdf_0": {"type": "diffuse"}}}
+    md = table.markdown({table.key(coat): coat, table.key(plain): plain})
+    assert "| s | coat | blendbsdf-tir |" in md and "| s | plain | blendbsdf |" in md
     assert json.loads(json.dumps(rows)) == rows
 
 
@@ -105,3 +111,20 @@ def test_rows_of_a_redone_target_made_by_other_code_are_converted_again_first(tm
     assert rows[table.key(old[1])]["code"] == "new" and len(rows) == 3
     table.run_table(path, ("mitsuba",), per_set=3, fits=["ngan2005/ward"], redo=["mitsuba:diffuse"])
     assert len(calls) == 2        # the redone row is this code's: not again
+
+
+def test_rows_of_a_redone_fit_set_or_material_are_converted_again_in_job_order(tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(table, "convert_row", lambda job: calls.append(job) or {**_fake_row(job), "code": "new"})
+    monkeypatch.setattr(table, "code_version", lambda: "new")
+    path = tmp_path / "t.jsonl"
+    js = table.jobs(("mitsuba",), 2, ["ngan2005/ward", "ngan2005/blinn-phong"])
+    path.write_text("".join(json.dumps(_fake_row(j)) + "\n" for j in js))
+    # a fit set: both of its rows; a material of another set: that row alone
+    one = table.key(js[2]).split(" ", 1)[1]        # material:alumina-oxide@ngan2005/blinn-phong
+    table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward", "ngan2005/blinn-phong"],
+                    redo=["ngan2005/ward", one])
+    assert calls == [js[1], js[2], js[3]]
+    # a redo that names nothing in the table converts nothing
+    table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward", "ngan2005/blinn-phong"], redo=["x/y"])
+    assert len(calls) == 3

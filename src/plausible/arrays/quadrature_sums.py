@@ -12,107 +12,107 @@ from .backend import _dr, _is_jit, _NotJit, kernel_view
 
 # -- quadrature sums on Dr.Jit ------------------------------------------------------------
 
-#: Largest number of lanes (nodes x channels) of one quadrature launch.
+#: Largest number of nodes (x channels) of one quadrature launch.
 MAX_LANES = 1 << 27
 
 
-def grid_sums(model, kind: str, wis: np.ndarray, theta, theta_w, phi, phi_w,
-              per_phi: bool = False, tmax=None, tmin=None) -> np.ndarray:
-    """Tensor-product quadrature sums for many incidences in one Dr.Jit launch:
+def tensor_sums(model, kind: str, grids, per_phi: bool = False) -> list:
+    """Tensor-product quadrature sums of many grids, each at its own incidence, in one
+    Dr.Jit launch (more only beyond :data:`MAX_LANES` nodes):
 
-    ``S[a] = sum_ij theta_w[a, i] phi_w[a, j] g(wis[a], wo(theta[a, i], phi[a, j]))``
+    ``S = sum_ij theta_w[i] phi_w[j] g(wi, wo(theta[i], phi[j]))``
 
-    with ``g = f cos(theta_o)`` (``kind="f"``, one sum per channel) or the pdf
-    (``kind="pdf"``); ``wo(theta, phi) = (sin t cos p, sin t sin p, cos t)``.  The node
-    arrays have one row per incidence, padded with zero weights to a common
-    length.  Every size enters the kernel as data (opaque), so the kernel is
-    traced and compiled once per model and reused for any grid.  Returns ``(A,)``
-    or ``(A, channels)``; with ``per_phi`` (``kind="pdf"`` only) the sums over ``i``
-    alone, ``(A, n_phi)``.
+    for each grid ``(wi, theta, theta_w, phi, phi_w, tmin, tmax)`` of ``grids`` (1-D
+    arrays of any lengths; ``tmin``, ``tmax`` None or shaped like ``phi``), with ``g = f
+    cos(theta_o)`` (``kind="f"``, one sum per channel) or the pdf (``kind="pdf"``) and
+    ``wo(theta, phi) = (sin t cos p, sin t sin p, cos t)``.  With ``tmax`` the rule is in
+    the half-vector frame of :func:`plausible.integrals.quadrature.half_vector_breaks`:
+    ``theta`` holds ``s``, the half vector is at polar angle ``t = tmin + s tmax`` (``tmin``
+    0 when None) and azimuth ``phi``, ``wo = 2 (wi.h) h - wi``, and each node's weight is
+    multiplied by ``tmax sin(t) 4 (wi.h)`` (``theta_w`` then holds no ``sin``).  Every grid
+    of one call is in the same frame.
 
-    With ``tmax`` (an array shaped like ``phi``) the rule is in the half-vector frame
-    of :func:`plausible.integrals.quadrature.half_vector_breaks`: ``theta`` holds
-    ``s``, the half vector is at polar angle ``t = s tmax`` and azimuth ``phi``,
-    ``wo = 2 (wi.h) h - wi``, and each node's weight is multiplied by
-    ``tmax sin(t) 4 (wi.h)`` (``theta_w`` then holds no ``sin``); with ``tmin`` too (shaped
-    alike) the polar angle is ``t = tmin + s tmax`` (``tmax`` the span)."""
-    dr, F, U, ops = _dr()
-    A, nt = theta.shape
-    npp = phi.shape[1]
+    One lane per azimuth node (and channel) of every grid sums its grid's polar
+    nodes in a loop of the kernel (a symbolic ``drjit.while_loop``, as many
+    iterations as the grid has polar nodes): the azimuth's values are read once, the
+    polar node's two per iteration, and no grid is padded to another's size.  Every
+    size and count enters as data, so the kernel is traced and compiled once per
+    model and frame and reused for any grids.  Returns one result per grid: a float,
+    or a ``(channels,)`` array for a colour ``f``; with ``per_phi`` (``kind="pdf"`` or a
+    scalar ``f``) the sums over ``i`` alone, one per azimuth node."""
     c = (model.channels or 1) if kind == "f" else 1
     if per_phi and c != 1:
-        raise ValueError("grid_sums: per_phi sums are for kind='pdf' or a scalar f")
-    per = nt * npp * c
-    group = max(1, MAX_LANES // max(per, 1))
-    out = []
-    for s in range(0, A, group):
-        e = min(s + group, A)
-        out.append(_grid_sums(dr, F, U, ops, model, kind, wis[s:e], theta[s:e], theta_w[s:e],
-                              phi[s:e], phi_w[s:e], c, per_phi, None if tmax is None else tmax[s:e],
-                              None if tmin is None else tmin[s:e]))
-    res = np.concatenate(out)
-    if per_phi:
-        return res.reshape(A, npp)
-    return res.reshape(A, c) if kind == "f" and model.channels else res
+        raise ValueError("tensor_sums: per_phi sums are for kind='pdf' or a scalar f")
+    zero = np.zeros(c) if model.channels and kind == "f" else 0.0
+    out = [np.zeros(len(g[3])) if per_phi else zero for g in grids]
+    batch, size = [], 0
+    for k, g in enumerate(grids):
+        n = len(g[1]) * len(g[3]) * c
+        if n == 0:
+            continue
+        if batch and size + n > MAX_LANES:
+            for j, v in zip(batch, _tensor_sums(model, kind, [grids[j] for j in batch], c, per_phi)):
+                out[j] = v
+            batch, size = [], 0
+        batch.append(k)
+        size += n
+    if batch:
+        for j, v in zip(batch, _tensor_sums(model, kind, [grids[j] for j in batch], c, per_phi)):
+            out[j] = v
+    return out
 
 
-def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, per_phi, tmax=None, tmin=None):
-    """One launch of :func:`grid_sums`: a lane per ``(incidence a, azimuth node j,
-    channel)``, which sums its ``nt`` polar nodes in a loop of the kernel (a symbolic
-    ``drjit.while_loop``: the per-azimuth values are read once per lane, and only the
-    polar node's two values per iteration); the per-incidence sums over ``j`` are
-    NumPy's (pairwise) sums of the lanes read back."""
-    A, nt = theta.shape
-    npp = phi.shape[1]
-    lanes = A * npp * c
-    # lane = (a * np + j) * c + chan, split with float64 arithmetic (exact for fewer
-    # than 2^40 lanes; a vectorised multiply-floor is much faster than integer
-    # division, which LLVM does lane by lane)
-    lane = F(dr.arange(U, lanes))
+def _tensor_sums(model, kind, grids, c, per_phi):
+    """One launch of :func:`tensor_sums`."""
+    dr, F, U, ops = _dr()
+    half = grids[0][6] is not None
+    nt = np.array([len(g[1]) for g in grids])
+    npp = np.array([len(g[3]) for g in grids])
+    t_off = np.concatenate([[0], np.cumsum(nt)[:-1]])
+    # per lane (grid a, azimuth node j, channel): its grid's first polar node, their count,
+    # its incidence and its azimuth's values; channel fastest
+    cols = int(npp.sum())
+    owner = np.repeat(np.arange(len(grids)), npp)
 
-    def divmod_(x, d):
-        q = dr.floor((x + 0.5) * dr.opaque(F, 1.0 / d))
-        return q, x - q * dr.opaque(F, float(d))
+    # Every array enters from NumPy memory aligned to 128 bytes (:func:`_aligned`): Dr.Jit maps
+    # it without a copy and writes its alignment into the kernel, which would otherwise vary
+    # with the address NumPy's allocator gives (a compilation per new call).
+    def per_lane(x):
+        return F(_aligned(np.repeat(x, c) if c > 1 else x, np.float64))
 
-    pt, chan = divmod_(lane, c) if c > 1 else (lane, None)
-    a, _ = divmod_(pt, npp)
-    pj, a = U(pt), U(a)
-    chan = U(chan) if c > 1 else dr.zeros(U, 1)
+    def per_lane_u(x):
+        return U(_aligned(np.repeat(x, c) if c > 1 else x, np.uint32))
 
-    def table(x):
-        # a single value as an opaque scalar: a one-element array made from NumPy
-        # memory enters the kernel with the alignment of its address, which varies,
-        # and so would the kernel (two variants to compile)
-        x = np.ascontiguousarray(x, dtype=np.float64).ravel()
-        return dr.opaque(F, float(x[0])) if x.size == 1 else F(x)
-
-    cp, sp = (dr.gather(F, table(x), pj) for x in (np.cos(phi), np.sin(phi)))
-    wi = tuple(dr.gather(F, table(wis[:, k]), a) for k in range(3))
-    row0 = a * dr.opaque(U, nt)          # the first polar node of the lane's incidence
+    phi = np.concatenate([g[3] for g in grids])
+    cp, sp = per_lane(np.cos(phi)), per_lane(np.sin(phi))
+    wis = np.array([g[0] for g in grids], dtype=np.float64)
+    wi = tuple(per_lane(wis[owner, k]) for k in range(3))
+    row0, count = per_lane_u(t_off[owner]), per_lane_u(nt[owner])
+    chan = U(_aligned(np.tile(np.arange(c), cols), np.uint32)) if c > 1 else dr.zeros(U, 1)
+    th = np.concatenate([g[1] for g in grids])
+    theta = F(_aligned(th, np.float64))
+    theta_w = F(_aligned(np.concatenate([g[2] for g in grids]), np.float64))
     mv = kernel_view(model, dr, F, chan, c)
-    if tmax is None:
-        tabs = tuple(table(x) for x in (np.sin(theta), np.cos(theta), theta_w))
-    else:   # the half-vector frame: h at (tmin + s tmax, phi), wo its mirror image of wi
-        tabs = (table(theta), table(theta_w))
-        tm = dr.gather(F, table(tmax), pj)
-        t0 = dr.gather(F, table(tmin), pj) if tmin is not None else None
+    if half:   # the half-vector frame: h at (tmin + s tmax, phi), wo its mirror image of wi
+        tm = per_lane(np.concatenate([g[6] for g in grids]))
+        t0 = per_lane(np.concatenate([np.zeros(len(g[3])) if g[5] is None else g[5] for g in grids]))
+    else:
+        st_tab, ct_tab = F(_aligned(np.sin(th), np.float64)), F(_aligned(np.cos(th), np.float64))
 
     def node(i):
-        """``g`` times the polar weight at the lane's azimuth and polar node ``i``."""
+        """``g`` times the polar weight at the lane's azimuth and its grid's polar node ``i``."""
         k = row0 + i
-        if tmax is None:
-            st, ct, wt = (dr.gather(F, x, k) for x in tabs)
-            wo = (st * cp, st * sp, ct)
-        else:
-            t = dr.gather(F, tabs[0], k) * tm
-            if t0 is not None:
-                t = t + t0
+        if half:
+            t = dr.gather(F, theta, k) * tm + t0
             st, ct = dr.sincos(t)
             h = (st * cp, st * sp, ct)
             d = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]
             wo = tuple(2.0 * d * hk - wk for hk, wk in zip(h, wi))
-            wt = dr.gather(F, tabs[1], k) * tm * st * (4.0 * d)
+            wt = dr.gather(F, theta_w, k) * tm * st * (4.0 * d)
             ct = wo[2]
+        else:
+            st, ct, wt = (dr.gather(F, x, k) for x in (st_tab, ct_tab, theta_w))
+            wo = (st * cp, st * sp, ct)
         if kind == "f":
             g = mv._f(ops, wi, wo, mv.p) * ct
         else:
@@ -120,18 +120,35 @@ def _grid_sums(dr, F, U, ops, model, kind, wis, theta, theta_w, phi, phi_w, c, p
         if not (_is_jit(g) or isinstance(g, (int, float))):
             raise _NotJit(type(g).__name__)
         g = F(g)
-        if tmax is not None:    # the contract's zero below the horizon (rounding at the edge s = 1)
+        if half:    # the contract's zero below the horizon (rounding at the edge s = 1)
             g = dr.select(wo[2] > 0, g, 0.0)
         return g * wt
 
-    # Every lane runs the same count of iterations (the rows are padded to nt), and the
-    # count is an opaque input: one kernel for every grid size.
-    _, acc = dr.while_loop((dr.zeros(U, lanes), dr.zeros(F, lanes)), lambda i, acc: i < dr.opaque(U, nt),
+    lanes = cols * c
+    _, acc = dr.while_loop((dr.zeros(U, lanes), dr.zeros(F, lanes)), lambda i, acc: i < count,
                            lambda i, acc: (i + 1, acc + node(i)), labels=("i", "acc"), mode="symbolic")
-    v = np.asarray(acc.numpy(), dtype=np.float64).reshape(A, npp, c) * np.asarray(phi_w)[:, :, None]
+    v = np.asarray(acc.numpy(), dtype=np.float64).reshape(cols, c) * np.concatenate([g[4] for g in grids])[:, None]
+    starts = np.concatenate([[0], np.cumsum(npp)[:-1]])
     if per_phi:
-        return v.reshape(A * npp)
-    return v.sum(axis=1).reshape(A * c)
+        return [v[a:a + n, 0] for a, n in zip(starts, npp)]
+    sums = np.add.reduceat(v, starts, axis=0)
+    return [x if model.channels and kind == "f" else float(x[0]) for x in sums]
 
 
-__all__ = ["MAX_LANES", "grid_sums"]
+#: The alignment (bytes) of the arrays :func:`_aligned` makes: 16 float64 lanes, the widest packet.
+ALIGN = 128
+
+
+def _aligned(x, dtype) -> np.ndarray:
+    """``x`` as a contiguous 1-D array of ``dtype`` whose address is a multiple of :data:`ALIGN`
+    (a view into a slightly larger buffer)."""
+    x = np.asarray(x, dtype=dtype).ravel()
+    size = np.dtype(dtype).itemsize
+    buf = np.empty(x.size + ALIGN // size, dtype=dtype)
+    off = (-buf.ctypes.data % ALIGN) // size
+    out = buf[off:off + x.size]
+    out[...] = x
+    return out
+
+
+__all__ = ["MAX_LANES", "tensor_sums"]

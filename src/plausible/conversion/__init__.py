@@ -9,10 +9,12 @@ name) or a Wavefront ``.mtl`` file (every ``newmtl``; :mod:`.mtl`) -- as
 plausible models, and fits a *target* to each:
 
 * ``"mitsuba"``: one of Mitsuba's ``diffuse``, ``roughconductor``,
-  ``roughplastic``, ``blendbsdf`` (diffuse + roughconductor), ``principled`` per
-  material, the best of the candidates (:func:`.mitsuba.candidates`) by the figure
-  minimised, or ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code
-  (:func:`.mitsuba.fit_family`);
+  ``roughplastic``, ``blendbsdf`` (diffuse + roughconductor), ``blendbsdf-tir``
+  (a ``blendbsdf`` of a roughconductor and a diffuse base under a coat of lower index
+  than outside, whose albedo falls with incidence), ``principled`` per material, the
+  best of the candidates (:func:`.mitsuba.candidates`) by the figure minimised --
+  refitted with the albedo band as a constraint where the best misses it -- or
+  ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code (:func:`.mitsuba.fit_family`);
 * ``"gltf"``: the glTF 2.0 metallic-roughness material, the registered model
   ``gltf-pbr`` fitted the same way, written by :func:`plausible.export.gltf.write_gltf`
   (refused with a message where that model is not installed);
@@ -41,16 +43,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .mitsuba import PROBE_THETAS, REPORT_THETAS
+from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
 
 __all__ = ["Conversion", "Converted", "Source", "TOLERANCE", "albedo_check", "convert", "mitsuba_xml", "read_sources"]
 
 #: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
 #: conversion of a conserving source is expected to keep; beyond it a warning.
 TOLERANCE = 0.05
-#: Incidences (degrees) at which a source's albedo is probed for energy conservation: the
-#: fit's (:data:`.mitsuba.PROBE_THETAS`, 0-80) and 85 (the fit reuses these albedos).
-CONSERVE_THETAS = tuple(sorted(set(PROBE_THETAS) | {85.0}))
 
 
 @dataclass
@@ -260,7 +259,8 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     """Convert every material of ``source`` to ``to`` under ``metric`` (module docstring).
 
     ``to``: ``"mitsuba"``, ``"mitsuba:TYPE"`` (``diffuse``, ``roughconductor``,
-    ``roughplastic``, ``blendbsdf``, ``principled``), ``"gltf"``, or a registered model's name.
+    ``roughplastic``, ``blendbsdf``, ``blendbsdf-tir``, ``principled``), ``"gltf"``, or a
+    registered model's name.
     ``metric``: one of :data:`plausible.fitting.metrics.METRICS` (the perceptual
     metric, default, fits lobe and albedo together).  ``starts``: optimiser
     starts of a registered-model fit.  Returns a :class:`Conversion`.
@@ -307,11 +307,29 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         families, why = CM.candidates(src.model, src_alb)
         fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
         r = min(fits, key=lambda x: x.figure)
-        family = r.family
-        tried = ", ".join(f"{x.family} {x.figure:.3g}" for x in fits)
+        tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
+        others = [x for x in fits if x.key not in CM.BAND_FAMILIES]
+        if r.key in CM.BAND_FAMILIES and others:
+            # kept only where the band needs it or the metric's own figure is lower too
+            o = min(others, key=lambda x: x.figure)
+            if o.band <= CM.BAND_HARD and o.errors[metric] <= r.errors[metric]:
+                tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
+                          f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
+                r = o
+        if r.band > CM.BAND_HARD:
+            # the band as a constraint of every candidate's fit, the lowest figure of those kept
+            hard = [CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True) for f in families]
+            r = min(hard, key=lambda x: x.figure)
+            tried += (f"; the albedo {min(fits, key=lambda x: x.figure).band:.3f} off at most, beyond "
+                      f"{CM.BAND_HARD}: refitted with the band as a constraint: "
+                      + ", ".join(f"{x.key} {x.figure:.3g} (albedo {x.band:.3f} off)" for x in hard))
+        family = r.key
         notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
     else:
         r = CM.fit_family(src.model, family, metric, probe=probe, target=target)
+        if r.band > CM.BAND_HARD:
+            r = CM.fit_family(src.model, family, metric, probe=probe, target=target, hard=True)
+            notes.append(f"fitted with the band as a constraint (the albedo beyond {CM.BAND_HARD} off without it)")
     textures = dict(src.textures)
     d = _with_textures(r.dict, family, textures, notes)
     tgt_alb = CM.sampler_albedo(r.dict)
@@ -323,13 +341,15 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         model = registry.make(family, **CM.model_params(d))
         return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
                          model)
-    return Converted(src.name, src.spec, f"mitsuba:{family}", d, r.errors, alb, warn, notes, textures, d)
+    return Converted(src.name, src.spec, f"mitsuba:{r.family}", d, r.errors, alb, warn, notes, textures, d)
 
 
 #: Which Mitsuba parameter an MTL texture replaces, per family.
 TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_reflectance",
-                            "principled": "base_color", "blendbsdf": "bsdf_0.reflectance"},
-                 "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance"}}
+                            "principled": "base_color", "blendbsdf": "bsdf_0.reflectance",
+                            "blendbsdf-tir": "bsdf_0.diffuse_reflectance"},
+                 "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance",
+                            "blendbsdf-tir": "bsdf_1.specular_reflectance"}}
 
 
 def _with_textures(d, family, textures, notes):

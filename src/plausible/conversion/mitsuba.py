@@ -15,7 +15,8 @@ with ``B_0`` Mitsuba's value with every slot 0 (zero unless the family has an
 times factors free of it, the coat ``specular_reflectance`` times its lobe;
 ``principled``: ``base_color`` enters the diffuse term and the metallic Schlick
 Fresnel linearly; ``blendbsdf``: ``(1 - weight)`` times a ``diffuse`` plus ``weight``
-times a ``roughconductor``, each linear in its colour; ``gltf-pbr``: see
+times a ``roughconductor``, each linear in its colour (``blendbsdf-tir`` likewise, of a
+``roughplastic`` with ``nonlinear = false`` and a ``roughconductor``: :func:`blend`); ``gltf-pbr``: see
 :data:`PLAUSIBLE_TYPES`; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
 on Mitsuba at random colours, and that it fails for ``nonlinear = true``).
 So the fit needs Mitsuba only per axis point: the bases are Mitsuba's values
@@ -42,6 +43,9 @@ NumPy.  The steps (:func:`fit_family`):
 5. **Measure** the result as loaded from its dict: every metric through Mitsuba
    again, and the albedo at 0, 45 and 75 degrees by Mitsuba's own sampler
    (:func:`sampler_albedo`).
+
+With ``hard=True`` the albedo band is a constraint of steps 2-4 (:data:`BAND_HARD`):
+:func:`plausible.conversion.convert` refits so where the best candidate misses it.
 """
 
 from __future__ import annotations
@@ -61,6 +65,9 @@ __all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fi
 REPORT_THETAS = (0.0, 45.0, 75.0)
 #: Incidences (degrees) of the fitting pairs and albedo terms: the fitting package's and 75.
 PROBE_THETAS = tuple(sorted(set(M.THETAS_DEG) | set(REPORT_THETAS)))
+#: Incidences (degrees) at which a source's albedo is probed for energy conservation: the
+#: fit's (:data:`PROBE_THETAS`, 0-80) and 85 (the fit reuses these albedos; :func:`candidates` reads them).
+CONSERVE_THETAS = tuple(sorted(set(PROBE_THETAS) | {85.0}))
 #: The rule of the albedo inside the fit, ``(m, levels, pole_levels)`` of
 #: :func:`plausible.integrals.quadrature.half_vector_rule`: every family here is a
 #: diffuse term and lobes about the mirror direction, which the half-vector frame
@@ -101,6 +108,9 @@ class Family:
     axes: tuple
     slots: tuple
     offset: bool = False
+    #: A blend of two families (``blendbsdf`` made by :func:`blend`): ``((prefix, Family), (prefix, Family))``,
+    #: whose bases are the parts' bases weighted by ``1 - weight`` and ``weight`` (:func:`_basis_now`).
+    parts: tuple = ()
 
     def bsdf_dict(self, point: dict, colours: dict) -> dict:
         """The ``mi.load_dict`` description at axis values ``point`` and slot colours
@@ -138,10 +148,47 @@ def get_entry(d: dict, dotted: str):
 #: specular + (1 - max F_d) base / pi``, ``metal_brdf = specular (base + (1 - base) fw)``).
 PLAUSIBLE_TYPES = ("gltf-pbr",)
 ALPHA = Axis("alpha", tuple(float(x) for x in np.geomspace(0.004, 1.0, 14)), 0.002, 1.0)
+ROUGHCONDUCTOR = Family("roughconductor", (("distribution", "ggx"), ("material", "none")), (ALPHA,),
+                        ("specular_reflectance",))
+#: Families chosen (:func:`plausible.conversion.convert`) over the best of the others only where that
+#: one misses the band (:data:`BAND_HARD`) or has the higher figure of the metric itself: ``blendbsdf-tir``
+#: moves part of a sharp lobe's energy into a diffuse term, which the figure minimised (the albedo twice,
+#: the band's cost) may prefer to a lobe closer to the source's.
+BAND_FAMILIES = ("blendbsdf-tir",)
+#: Weights of a blend's grid (refined within [0.02, 0.98]).
+WEIGHT = Axis("weight", (0.2, 0.5, 0.8), 0.02, 0.98, log=False)
+
+
+def blend(part0: Family, part1: Family, weight: Axis = WEIGHT) -> Family:
+    """``blendbsdf`` of ``part0`` (``bsdf_0``, weight ``1 - w``) and ``part1`` (``bsdf_1``, weight ``w``):
+    the parts' entries, axes and slots under their prefixes, and the ``weight`` axis.  Its bases are
+    the parts' own (:func:`_basis_now`; Mitsuba's ``blendbsdf`` evaluates ``(1 - w) f_0 + w f_1``),
+    so a grid over both parts costs one Mitsuba point per point of each part.  Axes: ``bsdf_1``'s, the
+    weight, then ``bsdf_0``'s (the refinement goes axis by axis, the lobe first)."""
+    fixed, axes, slots = [], [], []
+    for prefix, f in (("bsdf_0", part0), ("bsdf_1", part1)):
+        fixed += [(f"{prefix}.type", f.type)] + [(f"{prefix}.{k}", v) for k, v in f.fixed]
+        axes += [Axis(f"{prefix}.{a.name}", a.values, a.lo, a.hi, a.log) for a in f.axes]
+        slots += [f"{prefix}.{s}" for s in f.slots]
+    return Family("blendbsdf", tuple(fixed), tuple(axes[len(part0.axes):] + [weight] + axes[:len(part0.axes)]),
+                  tuple(slots), part0.offset or part1.offset, (("bsdf_0", part0), ("bsdf_1", part1)))
+
+
+#: A diffuse base under a smooth-to-rough coat whose index (``int_ior = 1``) is below the outside's
+#: (``ext_ior`` > 1), with ``specular_reflectance = 0``: Mitsuba's ``roughplastic`` weights its diffuse
+#: term by the coat's transmittance at both directions, which vanishes beyond the critical angle
+#: ``asin(1 / ext_ior)`` (total internal reflection, whose reflected light the zero specular colour
+#: discards), so the diffuse albedo falls with incidence, smoothly for a rough coat (measured by
+#: Mitsuba's sampler, white base: ``ext_ior`` 1.2, ``alpha`` 0.3: 0.909, 0.740, 0.404, 0.131 at
+#: 0, 45, 60, 75 degrees; 1.5, 0.3: 0.815, 0.340, 0.124, 0.051 -- about ``cos^2``).  The one Mitsuba
+#: mechanism found whose albedo falls by more than a fifth from 0 to 75 degrees (docs/convert.md).
+TIR_COAT = Family("roughplastic", (("distribution", "ggx"), ("nonlinear", False), ("int_ior", 1.0),
+                                   ("specular_reflectance", 0.0)),
+                  (Axis("ext_ior", (1.15, 1.4, 1.8), 1.02, 3.0), Axis("alpha", (0.15, 0.45), 0.02, 1.0)),
+                  ("diffuse_reflectance",))
 FAMILIES = {
     "diffuse": Family("diffuse", (), (), ("reflectance",)),
-    "roughconductor": Family("roughconductor", (("distribution", "ggx"), ("material", "none")), (ALPHA,),
-                             ("specular_reflectance",)),
+    "roughconductor": ROUGHCONDUCTOR,
     "roughplastic": Family("roughplastic", (("distribution", "ggx"), ("nonlinear", False)), (ALPHA,),
                            ("diffuse_reflectance", "specular_reflectance")),
     "blendbsdf": Family("blendbsdf", (("bsdf_0.type", "diffuse"), ("bsdf_1.type", "roughconductor"),
@@ -149,6 +196,9 @@ FAMILIES = {
                         (Axis("bsdf_1.alpha", ALPHA.values, ALPHA.lo, ALPHA.hi),
                          Axis("weight", (0.2, 0.5, 0.8), 0.02, 0.98, log=False)),
                         ("bsdf_0.reflectance", "bsdf_1.specular_reflectance")),
+    #: a sharp lobe beside a diffuse term that fades with incidence (:data:`TIR_COAT`): for sources whose
+    #: albedo falls (:data:`FALL`), which no family above follows
+    "blendbsdf-tir": blend(TIR_COAT, ROUGHCONDUCTOR),
     "gltf-pbr": Family("gltf-pbr", (),
                        (Axis("roughness", tuple(float(x) for x in np.geomspace(0.06, 1.0, 8)), 0.045, 1.0),
                         Axis("metallic", (0.0, 0.25, 0.5, 0.75, 1.0), 0.0, 1.0, log=False)),
@@ -234,6 +284,16 @@ _PROBES: dict = {}
 def _basis_now(probe: Probe, family: Family, point: dict):
     """``(F, Alb)``: rows ``B_0`` (zero without an offset) and ``B_j``, channel 0 of
     Mitsuba's value at white / zero slots (RGB variants treat channels alike)."""
+    if family.parts:
+        w = float(point["weight"])
+        F, A = [], []
+        for (prefix, part), scale in zip(family.parts, (1.0 - w, w)):
+            sub = {k[len(prefix) + 1:]: v for k, v in point.items() if k.startswith(prefix + ".")}
+            Fp, Ap = basis(probe, part, sub)
+            F.append(scale * Fp)
+            A.append(scale * Ap)
+        return (np.concatenate([[F[0][0] + F[1][0]], F[0][1:], F[1][1:]]),
+                np.concatenate([[A[0][0] + A[1][0]], A[0][1:], A[1][1:]]))
     zero = {s: 0.0 for s in family.slots}
     F0 = A0 = 0.0
     if family.offset:
@@ -277,25 +337,34 @@ ALBEDO_WEIGHT = 2.0
 BAND, BAND_WEIGHT = 0.02, 50.0
 
 
-def _band(a, A, rows):
+#: The band as a constraint (:func:`fit_family` with ``hard=True``): beyond ``BAND_HARD`` from the
+#: source's albedo at :data:`REPORT_THETAS` (the probe's albedo, within 2e-3 of Mitsuba's sampler; the
+#: Done-when's band is 0.05) each unit costs ``HARD_WEIGHT`` more, an exact penalty: far above what a
+#: unit of albedo is worth to the lobe's figure, so the fit meets the constraint wherever the family can.
+BAND_HARD, HARD_WEIGHT = 0.045, 1000.0
+
+
+def _band(a, A, rows, hard=False):
     if rows is None or a.shape[0] != A.shape[0]:
         return 0.0
-    return BAND_WEIGHT * max(0.0, float(np.max(np.abs(a[rows] - A[rows]))) - BAND)
+    d = float(np.max(np.abs(a[rows] - A[rows])))
+    return BAND_WEIGHT * max(0.0, d - BAND) + (HARD_WEIGHT * max(0.0, d - BAND_HARD) if hard else 0.0)
 
 
-def _figure(metric, F, Alb, x, g, A, eps, rows=None):
+def _figure(metric, F, Alb, x, g, A, eps, rows=None, hard=False):
     a = _predict(Alb, x)
     e = M.errors(_predict(F, x), g, a, A, eps)
     base = e["fcos_max"] + ALBEDO_WEIGHT * e["albedo_max"] if metric == "perceptual" else e[metric]
-    return base + _band(a, A, rows), e
+    return base + _band(a, A, rows, hard), e
 
 
 #: Weight of the albedo rows of the least squares, beyond equal weight of the two sets.
 LSQ_ALBEDO = 10.0
 
 
-def _lsq(F, Alb, g, A, eps, metric):
-    """Colours per channel by bounded linear least squares (step 2); (J, C)."""
+def _lsq(F, Alb, g, A, eps, metric, band=None):
+    """Colours per channel by bounded linear least squares (step 2); (J, C).  ``band``: the rows of
+    ``Alb`` where the albedo is held within :data:`BAND_HARD` of the source's (:func:`_within_band`)."""
     from scipy.optimize import lsq_linear
 
     J, C = F.shape[0] - 1, g.shape[1]
@@ -311,10 +380,42 @@ def _lsq(F, Alb, g, A, eps, metric):
             rows = np.concatenate([F[1:].T * w[:, None], Alb[1:].T * wa[:, None]])
             rhs = np.concatenate([(g[:, c] - F[0]) * w, (A[:, c] - Alb[0]) * wa])
         x[:, c] = lsq_linear(rows, rhs, bounds=(0.0, 1.0)).x
+        if band is not None:
+            x[:, c] = _within_band(rows, rhs, Alb, A[:, c], band, x[:, c])
     return x
 
 
-def _polish(F, Alb, x, g, A, eps, metric, rows=None):
+def _within_band(R, r, Alb, Ac, band, x0):
+    """The colours of one channel minimising ``|R x - r|^2`` on ``[0, 1]`` with the albedo at the
+    incidences ``band`` (rows of ``Alb``) within :data:`BAND_HARD` of ``Ac`` (SLSQP from ``x0``);
+    where no colours meet that, those nearest to it (the linear program of the smallest largest
+    difference).  ``x0`` when it already meets it."""
+    from scipy.optimize import linprog, minimize
+
+    P, q = Alb[1:, band].T, Ac[band] - Alb[0, band]        # albedo at the band rows: P x, target q
+    if np.all(np.abs(P @ x0 - q) <= BAND_HARD):
+        return x0
+    J = len(x0)
+    # min t subject to |P x - q| <= t, 0 <= x <= 1
+    lp = linprog(np.r_[np.zeros(J), 1.0], A_ub=np.block([[P, -np.ones((len(q), 1))], [-P, -np.ones((len(q), 1))]]),
+                 b_ub=np.r_[q, -q], bounds=[(0.0, 1.0)] * J + [(0.0, None)], method="highs")
+    if not lp.success:
+        return x0
+    xf = lp.x[:J]
+    if lp.x[J] > BAND_HARD:
+        return xf
+    tol = BAND_HARD - 1e-6
+    cons = [{"type": "ineq", "fun": lambda x: tol - (P @ x - q), "jac": lambda x: -P},
+            {"type": "ineq", "fun": lambda x: tol + (P @ x - q), "jac": lambda x: P}]
+    scale = max(float(np.sum(r * r)), 1e-30)
+    res = minimize(lambda x: float(np.sum((R @ x - r) ** 2)) / scale, xf,
+                   jac=lambda x: 2.0 * R.T @ (R @ x - r) / scale, method="SLSQP", bounds=[(0.0, 1.0)] * J,
+                   constraints=cons, options=dict(maxiter=200, ftol=1e-12))
+    x = np.clip(res.x, 0.0, 1.0)
+    return x if np.all(np.abs(P @ x - q) <= BAND_HARD) else xf
+
+
+def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False):
     """Step 4 on each channel; the better of ``x`` and the polished point per channel."""
     from scipy.optimize import minimize
 
@@ -325,12 +426,12 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None):
         gc, Ac = g[:, c:c + 1], A[:, c:c + 1]
 
         def true(z):
-            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows)[0]
+            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows, hard)[0]
 
         def smooth(z, beta):
             z = np.clip(z, 0, 1)[:, None]
             c, a = _predict(F, z), _predict(Alb, z)
-            band = _band(a, Ac, rows)
+            band = _band(a, Ac, rows, hard)
             if metric != "perceptual":
                 return M.objective(metric, c, gc, a, Ac, eps, beta=beta) + band
             return (M.objective(metric, c, gc, eps=eps, beta=beta)
@@ -368,6 +469,12 @@ class FamilyFit:
     points: int
     #: The figure minimised (the metric's, the albedo weighted, the band's penalty) at the result.
     figure: float = math.inf
+    #: The key of :data:`FAMILIES` (``family`` is the Mitsuba type: ``blendbsdf`` for two of them).
+    key: str = ""
+    #: The largest albedo difference from the source's at :data:`REPORT_THETAS` (the probe's, loaded result).
+    band: float = math.nan
+    #: Whether the band was a constraint of the fit (``fit_family(hard=True)``).
+    hard: bool = False
 
 
 def source_target(source, probe, albedo=None):
@@ -384,10 +491,14 @@ def source_target(source, probe, albedo=None):
     return g, np.broadcast_to(A, (len(A), 3)).copy()
 
 
-def fit_family(source, family: str | Family, metric: str = "perceptual", *, probe=None, target=None) -> FamilyFit:
+def fit_family(source, family: str | Family, metric: str = "perceptual", *, probe=None, target=None,
+               hard: bool = False) -> FamilyFit:
     """Fit the Mitsuba ``family`` (a key of :data:`FAMILIES`) to the ``source`` model
     under ``metric`` (steps of the module docstring).  ``probe``/``target``: a
-    :class:`Probe` and the source's ``(g, A)`` on it, to reuse across families."""
+    :class:`Probe` and the source's ``(g, A)`` on it, to reuse across families.
+    ``hard``: the band as a constraint -- the colours of every point by least squares within
+    :data:`BAND_HARD` of the source's albedo at :data:`REPORT_THETAS` where the point allows
+    (:func:`_within_band`), and the figure with the exact penalty :data:`HARD_WEIGHT` beyond it."""
     fam = FAMILIES[family] if isinstance(family, str) else family
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
@@ -400,8 +511,8 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     def score(point):
         count[0] += 1
         F, Alb = basis(probe, fam, point)
-        x = _lsq(F, Alb, g, A, eps, metric)
-        return _figure(metric, F, Alb, x, g, A, eps, rows)[0], x
+        x = _lsq(F, Alb, g, A, eps, metric, rows if hard else None)
+        return _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0], x
 
     # 2. scan
     grid = [dict(zip([a.name for a in fam.axes], vals))
@@ -422,15 +533,17 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
             best[ax.name] = ax.inv(float(r.x))
     F, Alb = basis(probe, fam, best)
     # 4. polish the colours
-    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric), g, A, eps, metric, rows)
-    figure = _figure(metric, F, Alb, x, g, A, eps, rows)[0]
+    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard)
+    figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0]
     colours = {s: x[j] for j, s in enumerate(fam.slots)}
     d = fam.bsdf_dict(best, colours)
     # 5. measure the loaded result
     fc, alb = probe.measure(_load(d))
     errors = M.errors(np.broadcast_to(fc, g.shape), g, np.broadcast_to(alb, A.shape), A, eps)
+    key = family if isinstance(family, str) else next((k for k, f in FAMILIES.items() if f == fam), fam.type)
+    band = float(np.max(np.abs(np.broadcast_to(alb, A.shape)[rows] - A[rows])))
     return FamilyFit(fam.type, d, best, {s: [float(v) for v in c] for s, c in colours.items()}, errors, count[0],
-                     figure)
+                     figure, key, band, hard)
 
 
 def _product(lists):
@@ -478,6 +591,11 @@ def diffuse_albedo(model) -> np.ndarray:
 #: the largest probed incidence has a Fresnel-like rise that a family without Fresnel
 #: (``diffuse``, ``roughconductor``) cannot follow.
 RISE = 0.025
+#: A source whose albedo falls by more than this (any channel) from normal incidence to any
+#: probed incidence is also fitted with ``blendbsdf-tir`` (:data:`TIR_COAT`): every other family's
+#: albedo is flat or rises, or falls by at most a fifth (docs/convert.md), and a flat family
+#: balanced between the ends is off by half the fall.
+FALL = 0.025
 
 
 def candidates(model, albedo) -> tuple[list, str]:
@@ -491,7 +609,9 @@ def candidates(model, albedo) -> tuple[list, str]:
     :data:`RISE` from normal incidence; else ``diffuse``, ``blendbsdf`` (a diffuse and a
     ``roughconductor`` without Fresnel, the composition of the published fits), ``roughplastic``
     when ``S <= 0.04`` at normal incidence and grey (channels within 10 %) or the albedo rises,
-    and ``principled``; ``principled`` for a source that declares no lobes.  (Decided at normal
+    and ``principled``; ``principled`` for a source that declares no lobes; and besides, for a
+    source whose albedo falls by more than :data:`FALL` from normal incidence to any incidence up
+    to 75 degrees (given the incidences), ``blendbsdf-tir``.  (Decided at normal
     incidence alone, a published fit with a dielectric Fresnel, ``chrome@low2012/cook-torrance-e2``,
     albedo 0.082 at 0 degrees and 0.287 at 75, was given ``roughconductor`` alone and missed by 0.10
     at both ends; ``colonial-maple-223@ngan2005/cook-torrance``, a specular 0.002 at normal incidence
@@ -500,8 +620,13 @@ def candidates(model, albedo) -> tuple[list, str]:
     a = np.asarray(albedo, float)
     a = a.reshape(1, -1) if a.ndim <= 1 else a
     a = np.broadcast_to(a, (a.shape[0], 3))
+    # the fall within the band's incidences (to 75 degrees: every GGX or Beckmann lobe loses a little
+    # beyond, by masking, 0.03 at 85 for cook-torrance:m=0.05)
+    upto = (np.asarray(CONSERVE_THETAS) <= max(REPORT_THETAS)) if len(a) == len(CONSERVE_THETAS) else slice(None)
+    fall = float(np.max(a[0] - a[upto]))
+    tir, why_tir = (["blendbsdf-tir"], f", an albedo falling by {fall:.3g}") if fall > FALL else ([], "")
     if not np.all(np.isfinite(D)) or not hasattr(model, "components"):
-        return ["principled"], "the source declares no diffuse/glossy lobes: the most general family"
+        return ["principled"] + tir, "the source declares no diffuse/glossy lobes: the most general family" + why_tir
     S = np.maximum(a - D, 0.0)
     S0 = S[0]
     rise = float(np.max(a - a[0]))
@@ -510,15 +635,16 @@ def candidates(model, albedo) -> tuple[list, str]:
         return ["diffuse"], f"no specular part (albedo {S.max():.3g} beside a diffuse {D.max():.3g})"
     if D.max() < NONE_BELOW:
         if rising:
-            return (["roughconductor", "roughplastic", "principled"],
-                    f"no diffuse part (specular albedo {S0.max():.3g}), an albedo rising by {rise:.3g} (Fresnel)")
-        return ["roughconductor"], f"no diffuse part (specular albedo {S0.max():.3g})"
+            return (["roughconductor", "roughplastic", "principled"] + tir,
+                    f"no diffuse part (specular albedo {S0.max():.3g}), an albedo rising by {rise:.3g} (Fresnel)"
+                    + why_tir)
+        return ["roughconductor"] + tir, f"no diffuse part (specular albedo {S0.max():.3g})" + why_tir
     plastic = (S0.max() <= PLASTIC_SPECULAR and S0.max() <= 1.1 * S0.min() + 1e-3) or rising
-    return (["diffuse", "blendbsdf"] + (["roughplastic"] if plastic else []) + ["principled"],
+    return (["diffuse", "blendbsdf"] + (["roughplastic"] if plastic else []) + ["principled"] + tir,
             f"a diffuse part ({D.max():.3g}) and a specular one ({S0.max():.3g} at normal incidence"
             + (f", {S.max():.3g} at most" if S.max() > S0.max() + 1e-3 else "") + ")"
             + (f", an albedo rising by {rise:.3g}" if rising else "")
-            + (" within a plastic's coat" if plastic and not rising else ""))
+            + (" within a plastic's coat" if plastic and not rising else "") + why_tir)
 
 
 # -- Mitsuba's own sampler ------------------------------------------------------------------------

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TARGETS", "convert_row", "jobs", "key", "markdown", "read_rows", "run_table", "summary"]
+__all__ = ["TARGETS", "convert_row", "family", "jobs", "key", "markdown", "read_rows", "run_table", "summary"]
 
 #: The targets of the table.
 TARGETS = ("mitsuba", "gltf")
@@ -136,14 +136,19 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
 
     ``workers``: 0 runs them one after another in this process; ``n >= 1`` in ``n``
     worker processes.  ``limit``: at most this many conversions this run.
-    ``redo``: targets (``"mitsuba:diffuse"``, ...) whose rows made by other code than this
-    (:func:`code_version`) are converted again first (the new row replaces the old one).
+    ``redo``: targets (``"mitsuba:diffuse"``, ...), fit sets (``"ngan2005/ward"``) or materials
+    (``"material:NAME@FIT"``) whose rows made by other code than this (:func:`code_version`) are
+    converted again first, in the order of :func:`jobs` (the new row replaces the old one).
     ``on_row(row)`` is called after each row is written.  Returns every row of ``path``."""
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
     done = read_rows(path)
     redo = set(redo)
-    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and done[key(j)].get("target") in redo
+    def wanted(j):
+        r = done[key(j)]
+        return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
+
+    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and wanted(j)
              and done[key(j)].get("code") != code_version()]
     todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
     if limit is not None:
@@ -197,6 +202,16 @@ def summary(rows, tol) -> list[dict]:
     return out
 
 
+def family(row) -> str:
+    """The family of a row's target: its Mitsuba type, ``blendbsdf-tir`` for the ``blendbsdf`` whose
+    ``bsdf_0`` is the coat of :data:`plausible.conversion.mitsuba.TIR_COAT` (a ``roughplastic``)."""
+    name = row["target"].split(":", 1)[-1]
+    params = row.get("params") or {}
+    if name == "blendbsdf" and isinstance(params.get("bsdf_0"), dict) and params["bsdf_0"].get("type") == "roughplastic":
+        return "blendbsdf-tir"
+    return name
+
+
 def _markdown(rows, to, tol) -> str:
     s = summary(rows, tol)
     lines = [f"#### to {to}: summary", "",
@@ -209,7 +224,7 @@ def _markdown(rows, to, tol) -> str:
               "|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: (r["fit"], r["material"])):
         ok = max(r["albedo_diff"]) <= tol
-        lines.append(f"| {r['fit']} | {r['material']} | {r['target'].split(':', 1)[-1]} | {r['perceptual']:.3g} | "
+        lines.append(f"| {r['fit']} | {r['material']} | {family(r)} | {r['perceptual']:.3g} | "
                      f"{r['l2']:.3g} | {r['log']:.3g} | " + " / ".join(f"{d:.3f}" for d in r["albedo_diff"])
                      + f" | {'yes' if ok else ('no' if r['conserving'] else 'no (source not conserving)')} | "
                      f"{r['seconds']:.1f} |")

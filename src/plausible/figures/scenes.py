@@ -194,28 +194,41 @@ def write_image(path_stem: Path, img: np.ndarray, exposure: float = 1.0) -> list
 
 def grid_figure(imgs, rows: int, cols: int, labels, row_labels=(), col_labels=(), exposure: float = 1.0,
                 title: str = ""):
-    """A matplotlib figure showing tone-mapped ``imgs`` (row-major) with a label under each."""
+    """A matplotlib figure showing tone-mapped ``imgs`` (row-major) with a label under each.
+
+    One axes holds every image (each in its own 2.3 x 2.6 inch cell, scaled to fit
+    2.2 x 2.05 inches): a hundred subplots (the atlas) cost about 5 CPU-s of axes set-up
+    and drawing, one axes with a hundred images a fraction of that."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(rows, cols, figsize=(2.3 * cols, 2.6 * rows), squeeze=False)
-    for i, ax in enumerate(axes.flat):
-        ax.set_xticks([])
-        ax.set_yticks([])
-        if i >= len(imgs):
-            ax.axis("off")
-            continue
-        ax.imshow(tonemap(imgs[i], exposure), interpolation="nearest")
-        ax.set_xlabel(labels[i], fontsize=7)
+    cw, ch = 2.3, 2.6                       # a cell, inches (the axes' data units)
+    left = 0.35 if row_labels else 0.0
+    top = (0.45 if title else 0.0) + (0.3 if col_labels else 0.0)
+    width, height = left + cw * cols, top + ch * rows
+    fig = plt.figure(figsize=(width, height))
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+    ax.set_xlim(0.0, width)
+    ax.set_ylim(height, 0.0)
+    ax.set_axis_off()
+    for i, img in enumerate(imgs[:rows * cols]):
+        r, c = divmod(i, cols)
+        h, w = np.shape(img)[:2]
+        s = min(2.2 / w, 2.05 / h)
+        x0 = left + c * cw + 0.5 * (cw - w * s)
+        y0 = top + r * ch + 0.05
+        ax.imshow(tonemap(img, exposure), extent=(x0, x0 + w * s, y0 + h * s, y0), interpolation="nearest")
+        ax.add_patch(plt.Rectangle((x0, y0), w * s, h * s, fill=False, linewidth=0.6, edgecolor="0.6"))
+        ax.text(left + (c + 0.5) * cw, y0 + h * s + 0.06, labels[i], ha="center", va="top", fontsize=7)
     for r, t in enumerate(row_labels):
-        axes[r, 0].set_ylabel(t, fontsize=9)
+        ax.text(0.5 * left, top + (r + 0.45) * ch, t, ha="center", va="center", rotation=90, fontsize=9)
     for c, t in enumerate(col_labels):
-        axes[0, c].set_title(t, fontsize=9)
+        ax.text(left + (c + 0.5) * cw, top - 0.15, t, ha="center", va="bottom", fontsize=9)
     if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+        ax.text(0.5 * width, 0.1, title, ha="center", va="top", fontsize=10)
+    ax.set_aspect("equal")
     return fig
 
 

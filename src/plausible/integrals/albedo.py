@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arrays import backend as _backend
-from ..arrays.quadrature_sums import grid_sums
+from ..arrays.quadrature_sums import tensor_sums
 from ..bxdf import BxDF
 from ..directions import as_directions
 from ..progress import start
@@ -104,13 +104,19 @@ class _Rules:
         cut = getattr(model, "mirror_cut", None)
         self.lune = bool(cut()) if callable(cut) else False
         self._breaks = {}
+        self._nodes = {}
         self.sums = {}
 
     def nodes(self, m, refine):
         """``(s, ws, phi, wp, t0, span)``: the nodes and weights in ``s`` and ``phi``
         and the polar range ``[t0, t0 + span]`` of each azimuth node (the node of
         ``(s, phi)`` is the half vector at polar angle ``t0 + s span``; see
-        :func:`_grid_sum`)."""
+        :func:`_grid_sum`).  Computed once per ``(m, refine)`` (callers only read them)."""
+        if (m, refine) not in self._nodes:
+            self._nodes[(m, refine)] = self._make_nodes(m, refine)
+        return self._nodes[(m, refine)]
+
+    def _make_nodes(self, m, refine):
         if refine not in self._breaks:
             self._breaks[refine] = half_vector_breaks(self.wi, self.model.peak_directions(self.wi),
                                                       self.levels, refine, axes=self.axes, lune=self.lune)
@@ -125,16 +131,32 @@ class _Rules:
         return (s, ws, np.concatenate([p, p[out]]), np.concatenate([wp, wp[out]]),
                 np.concatenate([np.zeros_like(p), t1[out]]), np.concatenate([t1, tmax[out] - t1[out]]))
 
-
-def _pad(rows):
-    """1-D arrays of unequal length as one 2-D array (padding repeats the first
-    node, with weight zero in the weight arrays padded alike)."""
-    n = max(len(r) for r in rows)
-    out = np.empty((len(rows), n))
-    for k, r in enumerate(rows):
-        out[k, :len(r)] = r
-        out[k, len(r):] = r[0]
-    return out
+    def shared(self, m, refine):
+        """Which nodes the rules ``(m, refine)`` and ``(m, 2 refine)`` share: ``(s1, c1, s2,
+        c2)``, boolean masks of the ``s`` nodes and the azimuth columns of each (the
+        order of :meth:`nodes`), true on the panels both floors have (the finer floor
+        splits some panels and keeps the others; a kept panel's nodes are the same
+        numbers).  None where the shared nodes do not match exactly."""
+        g1, g2 = self.nodes(m, refine), self.nodes(m, 2 * refine)
+        masks = []
+        for axis, col in ((0, False), (1, True)):
+            b1, b2 = self._breaks[refine][axis], self._breaks[2 * refine][axis]
+            k1 = set(zip(b1[:-1].tolist(), b1[1:].tolist()))
+            k2 = set(zip(b2[:-1].tolist(), b2[1:].tolist()))
+            both = k1 & k2
+            pair = []
+            for b, g in ((b1, g1), (b2, g2)):
+                on = np.repeat([(x, y) in both for x, y in zip(b[:-1].tolist(), b[1:].tolist())], m)
+                if col and len(g[2]) > len(on):      # the lune's second segments: columns p[out]
+                    p = panel_rule(b, m)[0]
+                    extra = np.isin(g[2][len(on):], p[on])
+                    on = np.concatenate([on, extra])
+                pair.append(on)
+            masks.append(pair)
+        (s1, s2), (c1, c2) = masks
+        same = (np.array_equal(g1[0][s1], g2[0][s2]) and np.array_equal(g1[1][s1], g2[1][s2])
+                and all(np.array_equal(g1[k][c1], g2[k][c2]) for k in range(2, 6)))
+        return (s1, c1, s2, c2) if same else None
 
 
 def _sums(model, kind, rules, requests):
@@ -144,35 +166,83 @@ def _sums(model, kind, rules, requests):
     (or ``pdf``) per grid (any object with the contract)."""
     if not requests:
         return
-    grids = [rules[a].nodes(m, r) for a, m, r in requests]
+    pieces, parts = _pieces(rules, requests)
+    grids = [g for _, g in pieces]
     total = sum(len(g[0]) * len(g[2]) for g in grids)
     if isinstance(model, BxDF) and _backend.choose(total, model, min_rows=_backend.AUTO_MIN_NODES,
                                                    kernel="quad-" + kind) == "drjit":
         def numpy():
-            return [_grid_sum(model, kind, rules[a].wi, g) for (a, _, _), g in zip(requests, grids)]
+            return [_grid_sum(model, kind, rules[a].wi, g) for a, g in pieces]
 
-        res = _backend.run(model, "quadrature", numpy, lambda: _jit_sums(model, kind, rules, requests, grids))
+        res = _backend.run(model, "quadrature", numpy, lambda: _jit_sums(model, kind, rules, pieces))
     else:
-        res = [_grid_sum(model, kind, rules[a].wi, g) for (a, _, _), g in zip(requests, grids)]
-    for (a, m, r), v in zip(requests, res):
+        res = [_grid_sum(model, kind, rules[a].wi, g) for a, g in pieces]
+    for (a, m, r), idx in zip(requests, parts):
+        v = res[idx[0]]
+        for k in idx[1:]:
+            v = v + res[k]
         rules[a].sums[(m, r)] = v if np.ndim(v) else float(v)
 
 
-def _jit_sums(model, kind, rules, requests, grids):
-    """:func:`plausible.arrays.quadrature_sums.grid_sums`, one launch per group of grids of about the
-    same size (:func:`_pad_groups`: the padding to a common size adds at most
-    :data:`PAD_WASTE` - 1 of the nodes; a grazing incidence's grid can be many times
-    the size of a normal one's)."""
-    res = [None] * len(requests)
-    for idx in _pad_groups([(len(g[0]), len(g[2])) for g in grids]):
-        wis = np.array([rules[requests[k][0]].wi for k in idx])
-        cols = [_pad([grids[k][c] for k in idx]) for c in range(6)]
-        for w, c in ((1, 0), (3, 2)):  # zero weight on the padding
-            for row, k in enumerate(idx):
-                cols[w][row, len(grids[k][c]):] = 0.0
-        for k, v in zip(idx, grid_sums(model, kind, wis, *cols[:4], tmin=cols[4], tmax=cols[5])):
-            res[k] = v
-    return res
+def _pieces(rules, requests):
+    """The tensor grids that give the sums of ``requests``: ``(pieces, parts)``, each
+    piece ``(angle index, grid)`` and each request's sum the sum of its ``parts``'
+    pieces.  A request's grid is one piece, but for a pair ``(m, r)``, ``(m, 2 r)`` of one
+    incidence in the same call (the first step's ``(6, 1)`` and ``(6, 2)``, and every
+    step that raises the order): the nodes the two share (the panels the finer floor
+    keeps, :meth:`_Rules.shared`: 40-50 % of the finer rule's for an anisotropic lobe)
+    are one piece, counted in both sums, and each rule's other nodes two more (its new
+    polar nodes by all its azimuths, the shared polar nodes by its new azimuths)."""
+    pieces, parts = [], []
+    index = {req: k for k, req in enumerate(requests)}
+    done = {}
+    for req in requests:
+        a, m, r = req
+        if req in done:
+            parts.append(done.pop(req))
+            continue
+        fine = (a, m, 2 * r)
+        masks = rules[a].shared(m, r) if fine in index else None
+        if masks is None:
+            parts.append([len(pieces)])
+            pieces.append((a, rules[a].nodes(m, r)))
+            continue
+        s1, c1, s2, c2 = masks
+        g1, g2 = rules[a].nodes(m, r), rules[a].nodes(m, 2 * r)
+        mine = []
+        for g, sm, cm in ((g1, s1, c1), (g2, s2, c2)):
+            ids = []
+            for si, ci in ((~sm, slice(None)), (sm, ~cm)):
+                sub = _subgrid(g, si, ci)
+                if len(sub[0]) and len(sub[2]):
+                    ids.append(len(pieces))
+                    pieces.append((a, sub))
+            mine.append(ids)
+        shared = _subgrid(g1, s1, c1)
+        common = []
+        if len(shared[0]) and len(shared[2]):
+            common = [len(pieces)]
+            pieces.append((a, shared))
+        if not common + mine[0] or not common + mine[1]:     # nothing to sum: keep whole grids
+            mine = [[len(pieces)], [len(pieces) + 1]]
+            pieces += [(a, g1), (a, g2)]
+            common = []
+        parts.append(common + mine[0])
+        done[fine] = common + mine[1]
+    return pieces, parts
+
+
+def _subgrid(g, s_mask, col_mask):
+    """The grid ``g`` of :meth:`_Rules.nodes` on the ``s`` nodes ``s_mask`` and the azimuth
+    columns ``col_mask`` (a boolean mask or a slice)."""
+    s, ws, p, wp, t0, span = g
+    return (s[s_mask], ws[s_mask], p[col_mask], wp[col_mask], t0[col_mask], span[col_mask])
+
+
+def _jit_sums(model, kind, rules, pieces):
+    """:func:`plausible.arrays.quadrature_sums.tensor_sums` of the grids of ``pieces``
+    (``(angle index, grid)``): one launch for all of them."""
+    return tensor_sums(model, kind, [(rules[a].wi, s, ws, p, wp, t0, span) for a, (s, ws, p, wp, t0, span) in pieces])
 
 
 def _grid_sum(model, kind, wi, grid):
@@ -231,40 +301,11 @@ def pdf_phi_sums_many(model, wi, grids) -> list:
     if grids and isinstance(model, BxDF) and _backend.choose(n, model, min_rows=_backend.AUTO_MIN_NODES,
                                                              kernel="phi-pdf") == "drjit":
         def jit():
-            out = [None] * len(grids)
-            for idx in _pad_groups([(len(t), len(p)) for t, _, p in grids]):
-                theta, phi = _pad([grids[a][0] for a in idx]), _pad([grids[a][2] for a in idx])
-                theta_w = np.zeros_like(theta)     # zero weight on the padding
-                for row, a in enumerate(idx):
-                    theta_w[row, :len(grids[a][1])] = grids[a][1]
-                sums = grid_sums(model, "pdf", np.ascontiguousarray(wi[idx]), theta, theta_w,
-                                 phi, np.ones_like(phi), per_phi=True)
-                for row, a in enumerate(idx):
-                    out[a] = sums[row, :len(grids[a][2])]
-            return out
+            return tensor_sums(model, "pdf", [(w, t, tw, p, np.ones_like(p), None, None)
+                                              for w, (t, tw, p) in zip(wi, grids)], per_phi=True)
 
         return _backend.run(model, "quadrature", numpy, jit)
     return numpy()
-
-
-#: A launch of grids padded to a common size holds at most this many times their nodes.
-PAD_WASTE = 1.25
-
-
-def _pad_groups(shapes) -> list:
-    """Indices of ``shapes`` (``(rows, cols)`` of tensor grids) in groups whose padding
-    to the group's largest rows and columns adds at most :data:`PAD_WASTE` - 1 of
-    their nodes (largest first; a grid alone is a group)."""
-    order = sorted(range(len(shapes)), key=lambda a: -shapes[a][0] * shapes[a][1])
-    groups, cur, rows, cols, nodes = [], [], 0, 0, 0
-    for a in order:
-        r, c = shapes[a]
-        if cur and (len(cur) + 1) * max(rows, r) * max(cols, c) > PAD_WASTE * (nodes + r * c):
-            groups.append(cur)
-            cur, rows, cols, nodes = [], 0, 0, 0
-        cur.append(a)
-        rows, cols, nodes = max(rows, r), max(cols, c), nodes + r * c
-    return groups + [cur] if cur else groups
 
 
 def _numpy_phi_sums(model, wi, grids):
