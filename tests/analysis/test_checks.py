@@ -201,3 +201,27 @@ def test_quick_check_catches_every_broken_model(cls, fails):
     rep = plausible.check(make(cls, n=30), quick=True)
     assert not rep[fails].passed and not rep.passed, str(rep)
     assert plausible.check(plausible.make("reciprocal-phong", n=30), quick=True).passed
+
+
+def test_quick_chi2_cells_settle_far_below_the_count_noise():
+    """The quick check's cells stop refining at ``QUICK_SETTLE`` (1e-3 of the mean cell);
+    for a lobe whose bands never settle (a ``cos^0`` Phong lobe's jump) their expected
+    counts at the quick check's 50,000 samples differ from those refined to 1e-4 (a
+    second, finer computation) by at most 5 % of each cell's Poisson noise, and shift
+    Pearson's statistic by ``sum (delta^2 / expected)`` <= 0.01, against its standard
+    deviation ``sqrt(2 dof)``, about 22 for these 256 cells."""
+    from plausible.analysis.chi2 import AdaptiveBinning
+    from plausible.analysis.report import QUICK_SETTLE
+
+    m = plausible.make("phong", ks=1.0, n=0.0)
+    n = 50_000
+    for theta in (45, 80):
+        wi = direction(math.radians(theta))
+        quick, fine = AdaptiveBinning(settle=QUICK_SETTLE).cells(m, wi), AdaptiveBinning().cells(m, wi)
+        eq = np.concatenate([e for *_, e in quick.bands]) * n
+        ef = np.concatenate([e for *_, e in fine.bands]) * n
+        assert len(eq) == len(ef) == 256
+        d = np.abs(eq - ef)
+        assert d.max() > 0     # the two computations differ: the quick one stopped earlier
+        assert np.all(d <= 0.05 * np.sqrt(np.maximum(ef, 1.0)))
+        assert np.sum(d ** 2 / np.maximum(ef, 1.0)) <= 0.01

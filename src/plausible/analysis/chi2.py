@@ -140,6 +140,9 @@ class AdaptiveBinning:
     n_theta: int = 16
     n_phi: int = 16
     m: int = 8
+    #: A band's cell integrals have settled when a refinement changes each by at most
+    #: ``settle`` times the mean cell's (plus 1e-12).
+    settle: float = 1e-4
 
     def cells(self, model, wi) -> Cells:
         return self.cells_many(model, [wi])[0]
@@ -147,7 +150,7 @@ class AdaptiveBinning:
     def cells_many(self, model, wis) -> list:
         """:meth:`cells` of each incidence of ``wis``, integrated together (every
         refinement step of every incidence in one launch)."""
-        return [Cells(*c) for c in _adaptive_cells(model, wis, self.n_theta, self.n_phi, self.m)]
+        return [Cells(*c) for c in _adaptive_cells(model, wis, self.n_theta, self.n_phi, self.m, self.settle)]
 
 
 @dataclass(frozen=True)
@@ -172,7 +175,7 @@ class FixedBinning:
 BINNINGS = {"adaptive": AdaptiveBinning, "fixed": FixedBinning}
 
 
-def _adaptive_cells(model, wis, n_theta, n_phi, m):
+def _adaptive_cells(model, wis, n_theta, n_phi, m, settle=1e-4):
     """``(t_edges, cells, phi0)`` of each incidence of ``wis`` (stages 1-2): the pilot
     rules' pdf in one call, then every band of every incidence integrated together
     at each refinement step (one launch on Dr.Jit)."""
@@ -216,7 +219,7 @@ def _adaptive_cells(model, wis, n_theta, n_phi, m):
         still = []
         for b, f in zip(active, fine):
             e = expected[b]
-            if not np.all(np.abs(f - e) <= 1e-4 * max(e.sum(), 1e-300) / len(e) + 1e-12):
+            if not np.all(np.abs(f - e) <= settle * max(e.sum(), 1e-300) / len(e) + 1e-12):
                 still.append(b)
             expected[b] = f
         active = still

@@ -144,7 +144,7 @@ def check_model(model, name: str = "", fit: str = "", thetas_deg=THETAS_DEG, qui
     reciprocity on the :data:`QUICK_RECIPROCITY` grid.  ``albedo_tol``: the albedos'
     error bound alone (default: :data:`QUICK_TOL` when ``quick``, else the
     integrator's default), the reciprocity grid kept."""
-    # on the compiled kernels (backend.eager): the 2 x 82,944 pairs of the full grid
+    # on the compiled kernels (backend.eager): the 2 x 97,344 pairs of the full grid
     # cost He-Torrance's NumPy series about 0.6 CPU-s a fit
     with backend.eager():
         if quick:

@@ -231,17 +231,18 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
 
 # -- worker processes -----------------------------------------------------------------
 
-#: Seconds each figure takes in a default run (2-core machine: its CPU seconds measured one figure after
-#: another in one process, at load 13-15, divided by 2.3, the ratio to the seconds of an idle machine), for
+#: Seconds each figure takes in a default run (2-core machine: its seconds in a worker of a two-worker
+#: ``make demo`` at load 11-16, 2 December 03:02 UTC, divided by 6.3, the ratio of that run to one on an
+#: idle machine; ``as-convergence`` has no 1024-spp reference render since that session), for
 #: the order in which worker processes take them: the longest first, so that no long figure starts last.
 #: Only the order depends on these; a figure not listed (the lobe figures but one: 0.4-1.6 CPU-s) counts as
 #: 1 s, and the ``seconds`` of a previous run in the output folder take precedence.
-EXPECTED_SECONDS = {"checks": 27, "materials-check": 21, "compensation": 19, "mitsuba-builtins": 8.5,
-                    "as-convergence": 8.5, "notes-cornell": 7.5, "neumann-fig8": 7.5, "materials-atlas": 7,
-                    "as-red-spheres": 6.5, "as-gold": 6, "as-three-views": 6, "neumann-fig5": 5, "neumann-fig1": 5,
-                    "lobe-kulla-conty": 4, "as-lambert-vs-as": 3.7, "neumann-fig3": 3.6, "neumann-perceptual": 3.2,
-                    "as-cylinder": 3.1, "neumann-fig7": 2.9, "as-half-sphere": 2.4, "neumann-fig6": 2.2,
-                    "neumann-fig4": 2.6, "as-furnace": 1.8}
+EXPECTED_SECONDS = {"compensation": 30, "checks": 27, "neumann-fig8": 19, "notes-cornell": 18, "materials-check": 17,
+                    "as-gold": 17, "as-three-views": 16, "mitsuba-builtins": 14, "as-red-spheres": 13,
+                    "materials-atlas": 12, "neumann-fig1": 7.4, "neumann-fig5": 7.3, "neumann-fig6": 6.8,
+                    "as-lambert-vs-as": 6.4, "as-cylinder": 5.3, "as-half-sphere": 5.1, "as-convergence": 4.7,
+                    "as-furnace": 3.7, "neumann-perceptual": 3.2, "neumann-fig3": 1.5, "neumann-fig7": 1.5,
+                    "neumann-fig4": 1.3}
 
 
 #: Figures made right after another one by the same worker process: follower -> leader.  The leader
