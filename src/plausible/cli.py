@@ -306,8 +306,14 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     if all_models and (jobs or _default_jobs()) > 1:   # whole models in worker processes, reports in order
         from .analysis.suite import check_many
 
+        def died(m, code, retried):     # on stderr: --json keeps stdout the reports
+            from .analysis.suite import _exit_text
+
+            click.echo(f"check {m!r}: its worker process died ({_exit_text(code)}); "
+                       + ("checking it again in a fresh worker" if retried else "not tried again"), err=True)
+
         done = iter(check_many(targets, quick=quick, jobs=jobs or _default_jobs(),
-                               progress=silent if as_json else _bar()))
+                               progress=silent if as_json else _bar(), on_worker_death=died))
     for m in targets:
         try:
             rep = run_check(m, quick=quick, progress=silent if as_json else _bar()) if done is None else next(done)

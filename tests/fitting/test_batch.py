@@ -70,33 +70,58 @@ def test_failed_fits_rerun_only_when_asked(tmp_path):
 
 TEN = [f"lambertian:rd={x}" for x in (0.1, 0.3, 0.5, 0.7, 0.9)]     # x 2 models: ten fits
 
+#: The batch's process: `plausible fit-batch` whose fit number ``PLAUSIBLE_TEST_STOP_AT``
+#: (counted from 1) touches the file ``PLAUSIBLE_TEST_MARK`` and then takes ten minutes,
+#: so the test signals it mid-fit with exactly STOP_AT - 1 rows written, however loaded
+#: the machine (polling the tables instead let the whole batch finish between two
+#: polls).  Ctrl-C is the terminal's, whatever the test inherited: a background job of
+#: a non-interactive shell, and so its children, ignore SIGINT.
+_CHILD = """
+import os, signal, time
+from pathlib import Path
+signal.signal(signal.SIGINT, signal.default_int_handler)
+from plausible.fitting import batch
+real, calls = batch.run_task, []
+def run_task(task):
+    calls.append(task)
+    if len(calls) == int(os.environ["PLAUSIBLE_TEST_STOP_AT"]):
+        Path(os.environ["PLAUSIBLE_TEST_MARK"]).touch()
+        time.sleep(600)
+    return real(task)
+batch.run_task = run_task
+from plausible.cli import main
+main()
+"""
 
-def _batch_until_rows(out, rows, **popen):
-    """Start `plausible fit-batch` on :data:`TEN` in a subprocess; return it once
-    ``rows`` rows are in the tables (or it ended)."""
-    cmd = [sys.executable, "-c", "from plausible.cli import main; main()", "fit-batch", *TEN,
-           "--models", "lambertian,modified-phong", "--metrics", "l2-cos", "--out", str(out),
-           "--workers", "0", "--starts", "1"]
-    proc = subprocess.Popen(cmd, **popen)
-    files = [out / "fits" / "lambertian.csv", out / "fits" / "modified-phong.csv"]
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and proc.poll() is None:
-        if sum(len(f.read_text().splitlines()) - 1 for f in files if f.exists()) >= rows:
-            break
+
+def _batch_stopped_in_fit(out, stop_at, **popen):
+    """Start `plausible fit-batch` on :data:`TEN` in a subprocess (:data:`_CHILD`); return
+    it once it is inside fit number ``stop_at``, the ``stop_at - 1`` before in the tables."""
+    mark = out.parent / f"{out.name}.fitting"
+    cmd = [sys.executable, "-c", _CHILD, "fit-batch", *TEN, "--models", "lambertian,modified-phong",
+           "--metrics", "l2-cos", "--out", str(out), "--workers", "0", "--starts", "1"]
+    env = dict(os.environ, PLAUSIBLE_TEST_STOP_AT=str(stop_at), PLAUSIBLE_TEST_MARK=str(mark))
+    proc = subprocess.Popen(cmd, env=env, **popen)
+    deadline = time.monotonic() + 600       # a bound for a stuck child, not a timing assumption
+    while not mark.exists():
+        if proc.poll() is not None or time.monotonic() > deadline:
+            proc.kill()
+            output = proc.communicate()[0]
+            pytest.fail(f"the batch ended (status {proc.returncode}) before fit {stop_at} started: {output}")
         time.sleep(0.05)
-    return proc, files
+    return proc, [out / "fits" / "lambertian.csv", out / "fits" / "modified-phong.csv"]
 
 
 def test_killed_batch_resumes_without_loss_or_repeat(tmp_path):
     targets, out = TEN, tmp_path / "res"
-    proc, files = _batch_until_rows(out, 2, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                    start_new_session=True)
+    proc, files = _batch_stopped_in_fit(out, 3, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                        start_new_session=True)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     with open(files[0], "a") as fh:           # a crash in the middle of a write
         fh.write("lambertian:rd=0.9,lambertian,l2-cos,o")
     kept = batch.load_results(out)
-    assert 2 <= len(kept) < 10
+    assert len(kept) == 2                     # the two fits finished before the kill; the third's cut row is gone
     s = batch.fit_batch(targets, ["lambertian", "modified-phong"], ["l2-cos"], out, workers=0, starts=1)
     rows = batch.load_results(out)
     keys = [(r["target"], r["model"], r["metric"]) for r in rows]
@@ -174,10 +199,11 @@ def test_cli_fit_batch_names_a_bad_model(tmp_path):
 
 def test_ctrl_c_keeps_finished_fits_and_says_how_to_resume(tmp_path):
     out = tmp_path / "res"
-    proc, _ = _batch_until_rows(out, 1, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc, _ = _batch_stopped_in_fit(out, 2, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     proc.send_signal(signal.SIGINT)
     output, _ = proc.communicate(timeout=60)
     assert proc.returncode == 130, output
     assert "interrupted" in output and "run the same command again to resume" in output
     rows = batch.load_results(out)
-    assert 1 <= len(rows) < 10 and all(r["status"] == "ok" for r in rows)
+    assert len(rows) == 1 and rows[0]["status"] == "ok"      # the fit before the Ctrl-C; the one in flight is not
+    assert list((out / "fits" / ".claims").iterdir()) == []  # nor is it left claimed
