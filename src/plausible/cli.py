@@ -302,28 +302,10 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     else:
         targets = [_model(model, params)]
     reports, verdicts, rows = [], [], []
-    done = None
-    if all_models and (jobs or _default_jobs()) > 1:   # whole models in worker processes, reports in order
-        from .analysis.suite import check_many
-
-        def died(m, code, retried):     # on stderr: --json keeps stdout the reports
-            from .analysis.suite import _exit_text
-
-            click.echo(f"check {m!r}: its worker process died ({_exit_text(code)}); "
-                       + ("checking it again in a fresh worker" if retried else "not tried again"), err=True)
-
-        done = iter(check_many(targets, quick=quick, jobs=jobs or _default_jobs(),
-                               progress=silent if as_json else _bar(), on_worker_death=died))
-    for m in targets:
-        try:
-            rep = run_check(m, quick=quick, progress=silent if as_json else _bar()) if done is None else next(done)
-            if isinstance(rep, Exception):
-                raise rep
-        except Exception as e:   # noqa: BLE001  one model's failure is reported, the others still run
-            if not all_models:
-                raise
+    for m, rep in zip(targets, _each_report(targets, all_models, quick, jobs, as_json)):
+        if isinstance(rep, Exception):   # --all: one model's failure is reported, the others still run
             reports.append(dict(CheckReport(m.name, m.params).to_dict(), passed=False,
-                                error=f"{type(e).__name__}: {e}"))
+                                error=f"{type(rep).__name__}: {rep}"))
             verdicts.append(False)
             rows.append((m, None, False))
             if not as_json:
@@ -341,15 +323,41 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
                 console.print(_claim_line(rep, info), soft_wrap=True)
     if as_json:
         click.echo(json.dumps(reports if all_models else reports[0], indent=1))
-    if all_models:   # the implausible baselines may fail what they do not claim
-        errors = sum("error" in r for r in reports)
-        if not as_json:
-            _print_compact(rows)
-            bad = [f"{r['model']} {_fmt_params(r['params'])}" for r, v in zip(reports, verdicts) if not v]
-            click.echo(f"{len(reports)} parameter sets of {len(registry.names())} models checked: "
-                       f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
-                       f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
+    if all_models and not as_json:   # the implausible baselines may fail what they do not claim
+        _print_compact(rows)
+        _print_summary(reports, verdicts)
     sys.exit(0 if all(verdicts) else 1)
+
+
+def _each_report(targets, all_models, quick, jobs, as_json):
+    """Each target's :class:`CheckReport` in order, or (with --all) the exception its
+    check raised; --all with more than one job checks whole models in worker processes."""
+    if all_models and (jobs or _default_jobs()) > 1:
+        from .analysis.suite import check_many, exit_text
+
+        def died(m, code, retried):     # on stderr: --json keeps stdout the reports
+            click.echo(f"check {m!r}: its worker process died ({exit_text(code)}); "
+                       + ("checking it again in a fresh worker" if retried else "not tried again"), err=True)
+
+        yield from check_many(targets, quick=quick, jobs=jobs or _default_jobs(),
+                              progress=silent if as_json else _bar(), on_worker_death=died)
+        return
+    for m in targets:
+        try:
+            yield run_check(m, quick=quick, progress=silent if as_json else _bar())
+        except Exception as e:   # noqa: BLE001  one model's failure is reported, the others still run
+            if not all_models:
+                raise
+            yield e
+
+
+def _print_summary(reports, verdicts):
+    """check --all's last line: how many sets hold what they claim, and which do not."""
+    errors = sum("error" in r for r in reports)
+    bad = [f"{r['model']} {_fmt_params(r['params'])}" for r, v in zip(reports, verdicts) if not v]
+    click.echo(f"{len(reports)} parameter sets of {len(registry.names())} models checked: "
+               f"{verdicts.count(True)} as claimed, {len(bad) - errors} not as claimed, "
+               f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
 
 
 def _default_jobs() -> int:

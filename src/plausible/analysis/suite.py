@@ -48,12 +48,18 @@ def check_many(models, *, quick: bool = False, jobs: int = 1, progress=None, on_
 
     models = list(models)
     tick = start(progress, len(models), "check")
-    if jobs <= 1 or len(models) < 2:
-        out = []
-        for m in models:
-            out.append(_check_one(m, quick))
-            tick()
-        return out
+    if jobs > 1 and len(models) > 1:
+        return _check_in_workers(models, quick, jobs, tick, on_worker_death)
+    out = []
+    for m in models:
+        out.append(_check_one(m, quick))
+        tick()
+    return out
+
+
+def _check_in_workers(models, quick, jobs, tick, on_worker_death) -> list:
+    """:func:`check_many` in ``jobs`` spawned worker processes fed one model at a time
+    over pipes; a dead worker is replaced and its model checked once more."""
     import multiprocessing as mp
     from collections import deque
     from multiprocessing.connection import wait
@@ -132,14 +138,14 @@ class WorkerDied(RuntimeError):
     """The worker processes checking a model died, each time it was tried."""
 
     def __init__(self, model, exitcodes):
-        codes = ", ".join(_exit_text(c) for c in exitcodes)
+        codes = ", ".join(exit_text(c) for c in exitcodes)
         super().__init__(f"the worker process checking {model!r} died, {len(exitcodes)} times ({codes}); "
                          "its error, if any, is printed above")
         self.model, self.exitcodes = model, list(exitcodes)
 
 
-def _exit_text(code) -> str:
-    """``-9`` -> ``killed by SIGKILL``; ``3`` -> ``exit code 3``."""
+def exit_text(code) -> str:
+    """A process's exit code in words: ``-9`` -> ``killed by SIGKILL``; ``3`` -> ``exit code 3``."""
     import signal
 
     if code is not None and code < 0:

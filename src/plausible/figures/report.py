@@ -345,10 +345,13 @@ def _run_parallel(out, make, results, *, jobs, resolution, spp, quick, console, 
     def spawn():
         mine, theirs = ctx.Pipe()
         p = ctx.Process(target=_worker, args=(theirs, str(out), resolution, spp, quick), daemon=True)
-        with _environment(WORKER_ENV):     # a spawned interpreter reads it when NumPy loads
-            p.start()
-        theirs.close()
-        workers[mine] = [p, None, {}]
+        try:
+            with _environment(WORKER_ENV):     # a spawned interpreter reads it when NumPy loads
+                p.start()
+        finally:                               # a Ctrl-C right after the start still ends it below
+            theirs.close()
+            if p.pid is not None:
+                workers[mine] = [p, None, {}]
         feed(mine)
 
     def feed(conn):
