@@ -45,18 +45,17 @@ def tensor_sums(model, kind: str, grids, per_phi: bool = False) -> list:
         raise ValueError("tensor_sums: per_phi sums are for kind='pdf' or a scalar f")
     zero = np.zeros(c) if model.channels and kind == "f" else 0.0
     out = [np.zeros(len(g[3])) if per_phi else zero for g in grids]
-    batch, size = [], 0
+    batches, size = [[]], 0             # grids of each launch, at most MAX_LANES nodes (x channels) each
     for k, g in enumerate(grids):
         n = len(g[1]) * len(g[3]) * c
         if n == 0:
             continue
-        if batch and size + n > MAX_LANES:
-            for j, v in zip(batch, _tensor_sums(model, kind, [grids[j] for j in batch], c, per_phi)):
-                out[j] = v
-            batch, size = [], 0
-        batch.append(k)
+        if batches[-1] and size + n > MAX_LANES:
+            batches.append([])
+            size = 0
+        batches[-1].append(k)
         size += n
-    if batch:
+    for batch in filter(None, batches):
         for j, v in zip(batch, _tensor_sums(model, kind, [grids[j] for j in batch], c, per_phi)):
             out[j] = v
     return out
