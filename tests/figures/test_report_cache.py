@@ -150,6 +150,35 @@ def test_a_worker_that_dies_fails_its_figure_and_the_others_are_made(tmp_path, m
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
 
 
+def _running(pid: int) -> bool:
+    """Whether the operating system still runs process ``pid`` (a zombie has ended).
+
+    ``multiprocessing``'s own view can be stale: a Ctrl-C landing in ``os.waitpid``
+    after the worker was reaped but before ``Process.join`` stored its exit code
+    leaves a dead worker listed as "started" in ``active_children()`` for good."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
+    except FileNotFoundError:
+        return False
+
+
+def test_running_tells_a_live_process_from_an_ended_one():
+    import subprocess
+
+    child = subprocess.Popen(["sleep", "30"])
+    try:
+        assert _running(child.pid) and _running(os.getpid())
+    finally:
+        child.kill()
+    deadline = time.monotonic() + 30
+    while _running(child.pid) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not _running(child.pid)             # killed, not yet reaped: a zombie
+    child.wait()
+    assert not _running(child.pid)             # reaped: gone
+
+
 def test_an_interrupted_parallel_run_ends_its_workers_and_leaves_no_partial_folder(tmp_path, monkeypatch, fake):
     import _thread
     import multiprocessing
@@ -177,7 +206,7 @@ def test_an_interrupted_parallel_run_ends_its_workers_and_leaves_no_partial_fold
     finally:
         done.set()
         watcher.join()
-    assert [p for p in multiprocessing.active_children() if p not in before] == []
+    assert [p for p in multiprocessing.active_children() if p not in before and _running(p.pid)] == []
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
     assert not (tmp_path / "sleep").exists() and (tmp_path / "index.html").exists()
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] in (16, 32)   # whole, of one run
