@@ -638,13 +638,10 @@ def convert_cmd(source, to, out, metric, as_json):
     SOURCE: a model spec, material:NAME@FIT, a Mitsuba BSDF (.xml, or .json of dicts by name),
     or a Wavefront .mtl file.
     """
-    from pathlib import Path
+    from .conversion import check_output, convert
 
-    from .conversion import convert
-
-    if Path(out).suffix.lower() not in (".json", ".xml", ".gltf"):
-        _fail(f"--out must end in .json, .xml or .gltf, got {out!r}")
     try:
+        check_output(out, to)          # a bad --out is refused before minutes of fitting
         res = convert(source, to=to, metric=metric)
         path = res.write(out)
     except ValueError as e:

@@ -10,11 +10,14 @@
 * :func:`jsonable` -- plain JSON data from results holding NumPy arrays and
   scalars (non-finite numbers become the strings ``"inf"``, ``"nan"``, which
   strict JSON readers accept).
+* :func:`write_atomic` -- a text file written whole or not at all (the output
+  files of ``convert`` and ``export``).
 """
 
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -84,3 +87,23 @@ def html_table(caption: str, header, rows) -> str:
 
 
 __all__ = ["fmt", "html_table", "jsonable", "shorten"]
+
+
+def write_atomic(path, text: str) -> None:
+    """Write ``text`` to ``path`` whole or not at all: into a temporary file beside it,
+    then renamed over it (``os.replace``, atomic on POSIX and Windows).  An error or an
+    interrupt (Ctrl-C) while writing removes the temporary file and leaves ``path`` as it
+    was (absent, or its old content): never a half-written file."""
+    path = os.fspath(path)
+    head, name = os.path.split(path)
+    tmp = os.path.join(head, f".{name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

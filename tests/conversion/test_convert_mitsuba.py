@@ -111,6 +111,38 @@ def test_a_source_that_is_not_energy_conserving_is_warned_about(tmp_path):
     assert c.albedo["0"]["source"][0] == pytest.approx(1.7, abs=2e-3)
 
 
+def _sampled_albedo(d, theta_deg, n=400_000, seed=5):
+    """The albedo of the Mitsuba BSDF ``d`` by its own ``sample`` (the mean of ``weight``), written
+    here apart from the conversion's check: ``(mean, standard error)`` per channel."""
+    import drjit as dr
+
+    b = mi.load_dict(d)
+    t = np.radians(theta_deg)
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.wi = mi.Vector3f(float(np.sin(t)), 0.0, float(np.cos(t)))
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    u = np.random.default_rng(seed).random((3, n))
+    _, w = b.sample(mi.BSDFContext(), si, mi.Float(u[0]), mi.Point2f(mi.Float(u[1]), mi.Float(u[2])), True)
+    w = np.array(w, dtype=float).reshape(3, n)
+    return w.mean(1), w.std(1) / np.sqrt(n)
+
+
+def test_a_target_that_gains_energy_is_warned_about(tmp_path):
+    # Kd + Ks = 1.4: the best principled is white, roughness 1, and reflects more than it receives
+    # (measured by Mitsuba's sampler: 1.049, 1.051, 1.215 at 0, 45, 75 degrees); the report said
+    # only that the source gains energy
+    (tmp_path / "hot.mtl").write_text("newmtl hot\nKd 0.8 0.8 0.8\nKs 0.6 0.6 0.6\nNs 100\n")
+    c = convert(str(tmp_path / "hot.mtl"), to="mitsuba:principled").items[0]
+    (gain,) = [w for w in c.warnings if w.startswith("the target is not energy conserving")]
+    for t in ("0", "45", "75"):
+        a, se = _sampled_albedo(c.params, int(t))
+        assert a[0] - 4 * se[0] > 1.005 and a[0] == pytest.approx(c.albedo[t]["target"][0], abs=5 * se[0] + 1e-3)
+        assert f"{t} degrees ({c.albedo[t]['target'][0]:.3f})" in gain
+    # a target below 1 everywhere is not warned about
+    d = convert("lambertian:rd=0.5,0.4,0.3", to="mitsuba:diffuse").items[0]
+    assert d.warnings == [] and max(_sampled_albedo(d.params, 75)[0]) < 0.51
+
+
 def test_the_probes_albedo_resolves_a_sharp_lobe_at_grazing_incidence():
     # Mitsuba's own sampler is the truth; the spherical-angle grid the fit used before
     # (hemisphere_grid, m = 4, 6 levels) put this lobe between its nodes at 75 degrees
@@ -225,7 +257,7 @@ def test_the_command_writes_the_file_and_reports_every_field(tmp_path):
 
 
 @pytest.mark.parametrize("args, words", [(["--to", "mitsuba", "--out", "x.gltf"], "convert with to='gltf'"),
-                                         (["--to", "mitsuba", "--out", "x.txt"], "--out must end in .json, .xml or .gltf")])
+                                         (["--to", "mitsuba", "--out", "x.txt"], "--out: the output file must end in .json, .xml or .gltf")])
 def test_the_command_refuses_bad_targets_and_outputs(tmp_path, args, words):
     from click.testing import CliRunner
 

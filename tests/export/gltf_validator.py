@@ -18,8 +18,15 @@ VALIDATOR = ROOT / ".cache" / "npm" / "node_modules" / "gltf-validator"
 _SCRIPT = """
 const validator = require(process.argv[1]);
 const fs = require('fs');
+const nodePath = require('path');
 const path = process.argv[2];
-validator.validateBytes(new Uint8Array(fs.readFileSync(path)), {uri: path, format: 'gltf', maxIssues: 200})
+// external resources (images referenced by URI) are read relative to the file, as the validator's README does
+const externalResourceFunction = (uri) => new Promise((resolve, reject) => {
+  fs.readFile(nodePath.resolve(nodePath.dirname(path), decodeURIComponent(uri)),
+              (err, data) => err ? reject(err.toString()) : resolve(new Uint8Array(data)));
+});
+validator.validateBytes(new Uint8Array(fs.readFileSync(path)),
+                        {uri: path, format: 'gltf', maxIssues: 200, externalResourceFunction})
   .then(r => process.stdout.write(JSON.stringify(r)))
   .catch(e => { process.stderr.write(String(e)); process.exit(2); });
 """
@@ -47,7 +54,8 @@ def require():
 
 def validate(path) -> dict:
     """The validator's report of ``path`` (``report["issues"]``: ``numErrors``, ``numWarnings``,
-    ``messages`` with ``code`` and ``pointer``)."""
+    ``messages`` with ``code`` and ``pointer``); images referenced by URI are read relative to
+    ``path`` and validated too (a missing one is an ``IO_ERROR``)."""
     require()
     out = subprocess.run(["node", "-e", _SCRIPT, str(VALIDATOR), str(path)], capture_output=True,
                          text=True, timeout=120)

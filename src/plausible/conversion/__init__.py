@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,7 +46,8 @@ import numpy as np
 
 from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
 
-__all__ = ["Conversion", "Converted", "Source", "TOLERANCE", "albedo_check", "convert", "mitsuba_xml", "read_sources"]
+__all__ = ["Conversion", "Converted", "OUTPUTS", "Source", "TOLERANCE", "albedo_check", "check_output", "convert",
+           "mitsuba_xml", "read_sources"]
 
 #: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
 #: conversion of a conserving source is expected to keep; beyond it a warning.
@@ -63,6 +65,8 @@ class Source:
     spec: str
     notes: list = field(default_factory=list)
     textures: dict = field(default_factory=dict)
+    #: The folder the texture file names are relative to (an ``.mtl`` file's own); None: as given.
+    folder: str | None = None
 
 
 @dataclass
@@ -80,6 +84,9 @@ class Converted:
     textures: dict = field(default_factory=dict)
     #: The target: a Mitsuba dict, or a registered model.
     result: object = None
+    #: The folder the texture file names are relative to (the source's; :meth:`Conversion.write`
+    #: writes them relative to the output file's folder).
+    folder: str | None = None
 
     def to_dict(self) -> dict:
         return {"name": self.name, "source": self.source, "target": self.target, "params": self.params,
@@ -98,31 +105,94 @@ class Conversion:
     def to_json(self) -> list:
         return [c.to_dict() for c in self.items]
 
-    def mitsuba_dicts(self) -> dict:
+    def mitsuba_dicts(self, where=None) -> dict:
         """``{name: dict for mi.load_dict}`` (a registered-model target: its plausible plugin,
-        loadable after :func:`plausible.mitsuba.register`)."""
+        loadable after :func:`plausible.mitsuba.register`); ``where``: the folder of the output
+        file, every ``bitmap``'s file name relative to it (:func:`texture_path`)."""
         from ..mitsuba.scene_dict import to_dict
 
-        return {c.name: (c.result if isinstance(c.result, dict) else to_dict(c.result)) for c in self.items}
+        def moved(d, folder):
+            if not isinstance(d, dict):
+                return d
+            if d.get("type") == "bitmap" and "filename" in d:
+                return {**d, "filename": texture_path(d["filename"], folder, where)}
+            return {k: moved(v, folder) for k, v in d.items()}
+
+        return {c.name: moved(c.result if isinstance(c.result, dict) else to_dict(c.result), c.folder)
+                for c in self.items}
 
     def write(self, path) -> Path:
-        """Write the targets to ``path`` by its suffix: ``.json`` (a dict of Mitsuba dicts by
-        name) or ``.xml`` (a scene fragment of ``<bsdf id=NAME>`` elements)."""
+        """Write the targets to ``path`` by its suffix (:func:`check_output`): ``.json`` (a dict of
+        Mitsuba dicts by name), ``.xml`` (a scene fragment of ``<bsdf id=NAME>`` elements) or
+        ``.gltf`` (``to="gltf"``).  Written whole or not at all (:func:`plausible.text.write_atomic`):
+        an error or Ctrl-C while writing leaves no half-written file.  ValueError naming ``out``
+        for a bad suffix, a missing folder or a file that cannot be written."""
+        from ..text import write_atomic
+
         p = Path(path)
-        suffix = p.suffix.lower()
-        if suffix == ".json":
-            p.write_text(json.dumps(self.mitsuba_dicts(), indent=2) + "\n")
-        elif suffix == ".xml":
-            p.write_text(mitsuba_xml(self.mitsuba_dicts()))
-        elif suffix == ".gltf":
-            write = _gltf_writer()
-            if self.to != "gltf":
-                raise ValueError(f"out: a .gltf file holds glTF materials; convert with to='gltf' (this "
-                                 f"conversion is to {self.to!r})")
-            write({c.name: c.result for c in self.items}, p)
+        suffix = check_output(p, self.to)
+        where = p.resolve().parent
+        if suffix == ".gltf":
+            from ..export.gltf import gltf_document
+
+            text = json.dumps(gltf_document({c.name: c.result for c in self.items},
+                                            textures=self.gltf_textures(where)), indent=1) + "\n"
+        elif suffix == ".json":
+            text = json.dumps(self.mitsuba_dicts(where), indent=2) + "\n"
         else:
-            raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {str(path)!r}")
+            text = mitsuba_xml(self.mitsuba_dicts(where))
+        try:
+            write_atomic(p, text)
+        except OSError as e:
+            raise ValueError(f"out: cannot write {str(path)!r}: {e.strerror or e}") from None
         return p
+
+    def gltf_textures(self, where=None) -> dict:
+        """``{material: {glTF texture slot: file}}`` of the textures a ``.gltf`` file references
+        (:data:`GLTF_TEXTURE_SLOTS`: ``map_Kd`` as ``baseColorTexture``); ``where``: the folder
+        of the output file, the names relative to it (:func:`texture_path`)."""
+        return {c.name: {slot: texture_path(c.textures[stmt], c.folder, where)
+                         for stmt, slot in GLTF_TEXTURE_SLOTS.items() if stmt in c.textures}
+                for c in self.items if any(stmt in c.textures for stmt in GLTF_TEXTURE_SLOTS)}
+
+
+def texture_path(name: str, folder, where) -> str:
+    """A texture's file ``name`` as written in its source (relative to ``folder``, the
+    ``.mtl`` file's) relative to ``where``, the output file's folder, with ``/``
+    separators; ``name`` as given (``\\`` as ``/``) when ``folder`` or ``where`` is None or
+    the name is absolute.  So the references of an output written anywhere find the files."""
+    name = str(name).replace("\\", "/")
+    if folder is None or where is None or Path(name).is_absolute():
+        return name
+    try:
+        return Path(os.path.relpath(Path(folder) / name, where)).as_posix()
+    except ValueError:          # another drive (Windows): the absolute path
+        return (Path(folder) / name).as_posix()
+
+
+#: The output suffixes :meth:`Conversion.write` writes.
+OUTPUTS = (".json", ".xml", ".gltf")
+
+
+def check_output(path, to: str) -> str:
+    """The suffix of the output ``path`` of a conversion to ``to``, checked before anything is
+    converted (the command line calls it first): one of :data:`OUTPUTS`, ``.gltf`` only for
+    ``to="gltf"``, and its folder an existing directory.  ValueError naming ``out`` otherwise."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in OUTPUTS:
+        raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {str(path)!r}")
+    if suffix == ".gltf":
+        _gltf_writer()
+        if str(to).strip() != "gltf":
+            raise ValueError(f"out: a .gltf file holds glTF materials; convert with to='gltf' (this "
+                             f"conversion is to {str(to).strip()!r})")
+    folder = p.parent if str(p.parent) else Path(".")
+    if not folder.is_dir():
+        raise ValueError(f"out: the folder of {str(path)!r} does not exist ({str(folder)!r})")
+    if p.is_dir():
+        raise ValueError(f"out: {str(path)!r} is a directory")
+    return suffix
 
 
 #: The registered model of the glTF 2.0 metallic-roughness BRDF (issue 32's glTF part).
@@ -174,7 +244,7 @@ def read_sources(source) -> list[Source]:
             out = []
             for m in read_mtl(text):
                 model, spec, notes = as_model(m)
-                out.append(Source(m.name, model, spec, notes, m.texture_files))
+                out.append(Source(m.name, model, spec, notes, m.texture_files, str(Path(text).resolve().parent)))
             return out
         if suffix == ".xml":
             return _xml_sources(text)
@@ -340,8 +410,9 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
 
         model = registry.make(family, **CM.model_params(d))
         return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
-                         model)
-    return Converted(src.name, src.spec, f"mitsuba:{r.family}", d, r.errors, alb, warn, notes, textures, d)
+                         model, src.folder)
+    return Converted(src.name, src.spec, f"mitsuba:{r.family}", d, r.errors, alb, warn, notes, textures, d,
+                     src.folder)
 
 
 #: Which Mitsuba parameter an MTL texture replaces, per family.
@@ -352,11 +423,25 @@ TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_r
                             "blendbsdf-tir": "bsdf_1.specular_reflectance"}}
 
 
+#: The glTF material's texture that an MTL texture becomes in a ``.gltf`` output (a reference to
+#: the file as the MTL names it; glTF multiplies ``baseColorTexture`` by ``baseColorFactor``, the
+#: fitted colour, as MTL multiplies ``map_Kd`` by ``Kd``).
+GLTF_TEXTURE_SLOTS = {"map_Kd": "baseColorTexture"}
+
+
 def _with_textures(d, family, textures, notes):
     import copy
 
     from . import mitsuba as CM
 
+    if family == GLTF_MODEL:
+        for stmt in textures:
+            if stmt in GLTF_TEXTURE_SLOTS:
+                notes.append(f"{stmt} {textures[stmt]}: the .gltf material's {GLTF_TEXTURE_SLOTS[stmt]} (times the "
+                             f"fitted baseColorFactor, as MTL multiplies {stmt} by Kd; the fit used the constant colour)")
+            else:
+                notes.append(f"{stmt} {textures[stmt]}: carried by reference only (no glTF texture takes it)")
+        return copy.deepcopy(d)
     d = copy.deepcopy(d)
     for stmt, slots in TEXTURE_SLOTS.items():
         if stmt in textures and family in slots:
@@ -370,12 +455,24 @@ def _with_textures(d, family, textures, notes):
     return d
 
 
+#: How far above 1 the target's measured albedo (its sampler's estimate, standard error below
+#: 1e-3) may be before the report warns that the target gains energy.
+GAIN_TOLERANCE = 5e-3
+
+
 def _albedo_warnings(alb):
     """A warning naming every incidence where the target is beyond :data:`TOLERANCE`, with
-    the difference and both albedos in the channel of the largest difference."""
+    the difference and both albedos in the channel of the largest difference; and one where
+    the target's own albedo exceeds 1 (by more than :data:`GAIN_TOLERANCE`): it gains energy,
+    whatever the source (Mitsuba's ``principled`` and glTF's BRDF can, at grazing incidence)."""
+    out = []
+    gain = [(t, max(v["target"])) for t, v in alb.items() if max(v["target"]) > 1.0 + GAIN_TOLERANCE]
+    if gain:
+        out.append("the target is not energy conserving: its albedo exceeds 1 at "
+                   + ", ".join(f"{t} degrees ({a:.3f})" for t, a in gain))
     bad = [(t, v) for t, v in alb.items() if v["max_abs_difference"] > TOLERANCE]
     if not bad:
-        return []
+        return out
 
     def one(t, v):
         c = int(np.argmax(np.abs(v["difference"])))
@@ -384,7 +481,7 @@ def _albedo_warnings(alb):
 
     return ["the target's albedo differs from the source's by more than "
             f"{TOLERANCE} at " + ", ".join(one(t, v) for t, v in bad)
-            + ": the target family cannot follow the source's albedo curve"]
+            + ": the target family cannot follow the source's albedo curve"] + out
 
 
 def _to_model(src, name, metric, starts, src_alb, warn):
@@ -404,7 +501,7 @@ def _to_model(src, name, metric, starts, src_alb, warn):
 
     params = {k: (registry.spec_of(v) if hasattr(v, "eval") else v) for k, v in params.items()}
     return Converted(src.name, src.spec, name, params, dict(r.errors), alb, warn + _albedo_warnings(alb), notes,
-                     dict(src.textures), r.model)
+                     dict(src.textures), r.model, src.folder)
 
 
 def albedo_check(source_model, bsdf_dict: dict, tolerance: float = TOLERANCE):

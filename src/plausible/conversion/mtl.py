@@ -42,7 +42,8 @@ gives the reasons):
   ``d``/``Tr`` (dissolve), ``Ni`` (index, used by ``illum 4-7``), ``Ke``:
   noted and ignored.  Every ``map_*`` (and ``bump``, ``disp``, ``decal``,
   ``refl``) is carried by reference: its file name (and options) in
-  :attr:`MtlMaterial.textures`.
+  :attr:`MtlMaterial.textures`, the file name alone (what follows the options,
+  spaces kept) in :attr:`MtlMaterial.texture_files`.
 
 Defaults where a statement is missing: ``Kd = Ks = 0``, ``Ns = 0``, ``illum 2``
 (each noted).  A bad value raises ValueError naming the file, the line, the
@@ -90,8 +91,39 @@ class MtlMaterial:
 
     @property
     def texture_files(self) -> dict:
-        """Statement -> file name (the last word of its line; options come before it)."""
-        return {k: v.split()[-1] for k, v in self.textures.items() if v.split()}
+        """Statement -> file name (what follows the statement's options, :func:`texture_file`)."""
+        return {k: texture_file(v.split()) for k, v in self.textures.items() if texture_file(v.split())}
+
+
+#: The options of a texture statement (``map_Kd -s 1 1 1 wood.png``) and how many words each takes
+#: (``-o``, ``-s``, ``-t``: one to three numbers), from the specification.
+TEXTURE_OPTIONS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1, "-imfchan": 1,
+                   "-mm": 2, "-o": 3, "-s": 3, "-t": 3, "-texres": 1, "-type": 1}
+
+
+def _is_number(w) -> bool:
+    try:
+        float(w)
+    except ValueError:
+        return False
+    return True
+
+
+def texture_file(words) -> str:
+    """The file name of a texture statement's ``words``: what follows its options
+    (:data:`TEXTURE_OPTIONS`), spaces kept (``map_Kd -s 1 1 1 my wood.png`` -> ``my wood.png``);
+    ``""`` where nothing follows.  An option not in the table is skipped with the numbers after it."""
+    i, words = 0, list(words)
+    while i < len(words) and len(words[i]) > 1 and words[i][0] == "-" and words[i][1:].isalpha():
+        n = TEXTURE_OPTIONS.get(words[i].lower())
+        i += 1
+        if n in (1, 2):
+            i += n
+        else:          # -o/-s/-t: up to three numbers; an unknown option: the numbers after it
+            k = 0
+            while i < len(words) and k < (n or len(words)) and _is_number(words[i]):
+                i, k = i + 1, k + 1
+    return " ".join(words[i:])
 
 
 def _numbers(where, key, words, lo, hi):
@@ -163,8 +195,8 @@ def read_mtl(path) -> list[MtlMaterial]:
         elif key == "illum":
             cur.illum = _illum(where, words)
         elif key.startswith("map_") or key in TEXTURES:
-            if not words:
-                raise ValueError(f"{where}: {key} needs a file name")
+            if not texture_file(words):
+                raise ValueError(f"{where}: {key} needs a file name (after its options), got {' '.join(words)!r}")
             cur.textures[key] = " ".join(words)
         elif key in IGNORED:
             cur.notes.append(f"{key}: {IGNORED[key]}")

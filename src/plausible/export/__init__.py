@@ -37,8 +37,6 @@ values in a ``.brdf`` file, with the interpolation error stated).
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from .brdf_explorer import BRDF_TABLE_LIMIT, brdf_tables, slider_range, to_brdf
 from .shader import GLSLShader, Uniform, check_prefix, to_glsl, to_js, uniform_params
 
@@ -60,7 +58,9 @@ def write(model, fmt: str, path, uniforms=False, prefix: str = "plausible",
     else:
         raise ValueError(f"export format must be one of {', '.join(map(repr, FORMATS))}, got {fmt!r}")
     if path is not None:
-        Path(path).write_text(text)
+        from ..text import write_atomic
+
+        write_atomic(path, text)
     return text
 
 

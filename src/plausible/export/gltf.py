@@ -39,7 +39,7 @@ import numpy as np
 
 from .. import registry
 
-__all__ = ["gltf_document", "gltf_material", "sphere", "write_gltf"]
+__all__ = ["TEXTURE_SLOTS", "gltf_document", "gltf_material", "image_uri", "sphere", "write_gltf"]
 
 #: glTF's numbers for the types the file uses.
 _FLOAT, _UNSIGNED_SHORT = 5126, 5123
@@ -129,21 +129,74 @@ def _buffer(arrays):
     return {"byteLength": len(blob), "uri": uri}, views, accessors
 
 
-def gltf_document(materials: dict, *, rings: int = 32, segments: int = 64) -> dict:
+#: The material textures a file can reference (``textures`` of :func:`gltf_document`).
+TEXTURE_SLOTS = ("baseColorTexture",)
+
+
+def image_uri(filename: str) -> str:
+    """A file name as a glTF image URI (a relative URI reference): backslashes as ``/``, and
+    characters a URI cannot hold (spaces, ``#``, ``%``, non-ASCII) percent-encoded.
+
+    >>> image_uri(r"tex\\my wood#2.png")
+    'tex/my%20wood%232.png'
+    """
+    from urllib.parse import quote
+
+    name = str(filename).strip().replace("\\", "/")
+    if not name:
+        raise ValueError("a texture needs a file name")
+    return quote(name, safe="/:@!$&'()*+,;=-._~")
+
+
+def _textures(mats, textures):
+    """Images, textures and the material indices that need ``TEXCOORD_0``, with each material's
+    texture slots filled (one image per distinct file)."""
+    textures = textures or {}
+    names = [m["name"] for m in mats]
+    unknown = [n for n in textures if n not in names]
+    if unknown:
+        raise ValueError(f"textures: no material named {unknown[0]!r} (materials: {', '.join(names)})")
+    images, uris, textured = [], {}, set()
+    for k, m in enumerate(mats):
+        for slot, filename in (textures.get(m["name"]) or {}).items():
+            if slot not in TEXTURE_SLOTS:
+                raise ValueError(f"material {m['name']!r}: texture slot {slot!r} is not written; "
+                                 f"slots: {', '.join(TEXTURE_SLOTS)}")
+            uri = image_uri(filename)
+            if uri not in uris:
+                uris[uri] = len(images)
+                images.append({"uri": uri})
+            m["pbrMetallicRoughness"][slot] = {"index": uris[uri], "texCoord": 0}
+            textured.add(k)
+    return images, textured
+
+
+def gltf_document(materials: dict, *, rings: int = 32, segments: int = 64, textures: dict | None = None) -> dict:
     """The glTF 2.0 JSON (a dict) of ``materials`` (name -> ``gltf-pbr`` parameters or
-    model), one sphere each (see the module docstring)."""
+    model), one sphere each (see the module docstring).  ``textures``: ``{material:
+    {slot: file}}`` (slots :data:`TEXTURE_SLOTS`), each file referenced by a relative URI
+    (:func:`image_uri`, not embedded), its material's sphere given ``TEXCOORD_0``
+    (``u`` the azimuth, ``v`` the polar angle, both 0-1)."""
     if not isinstance(materials, dict) or not materials:
         raise ValueError(f"materials must be a non-empty dict of name -> gltf-pbr parameters, "
                          f"got {type(materials).__name__} {materials!r:.60}")
     mats = [gltf_material(name, params) for name, params in materials.items()]
+    images, textured = _textures(mats, textures)
     pos, nrm, tan, idx = sphere(rings, segments)
-    buf, views, accessors = _buffer([(pos, "VEC3", _ARRAY_BUFFER), (nrm, "VEC3", _ARRAY_BUFFER),
-                                     (tan, "VEC4", _ARRAY_BUFFER), (idx, "SCALAR", _ELEMENT_ARRAY_BUFFER)])
+    arrays = [(pos, "VEC3", _ARRAY_BUFFER), (nrm, "VEC3", _ARRAY_BUFFER),
+              (tan, "VEC4", _ARRAY_BUFFER), (idx, "SCALAR", _ELEMENT_ARRAY_BUFFER)]
+    if textured:
+        u, v = np.meshgrid(np.linspace(0.0, 1.0, segments + 1), np.linspace(0.0, 1.0, rings + 1))
+        arrays.append((np.stack([u.ravel(), v.ravel()], -1).astype(np.float32), "VEC2", _ARRAY_BUFFER))
+    buf, views, accessors = _buffer(arrays)
+
     def prim(m, k):
         # TANGENT only where KHR_materials_anisotropy needs it (the validator reports it unused elsewhere)
         att = {"POSITION": 0, "NORMAL": 1}
         if "KHR_materials_anisotropy" in m.get("extensions", {}):
             att["TANGENT"] = 2
+        if k in textured:
+            att["TEXCOORD_0"] = 4
         return {"attributes": att, "indices": 3, "material": k, "mode": _TRIANGLES}
 
     cols = math.ceil(math.sqrt(len(mats)))
@@ -156,14 +209,19 @@ def gltf_document(materials: dict, *, rings: int = 32, segments: int = 64) -> di
            "materials": mats, "buffers": [buf], "bufferViews": views, "accessors": accessors}
     if used:
         doc["extensionsUsed"] = used
+    if images:
+        doc["images"] = images
+        doc["textures"] = [{"source": i} for i in range(len(images))]
     return doc
 
 
-def write_gltf(materials: dict, path, *, rings: int = 32, segments: int = 64) -> Path:
+def write_gltf(materials: dict, path, *, rings: int = 32, segments: int = 64, textures: dict | None = None) -> Path:
     """Write ``materials`` (name -> ``gltf-pbr`` parameters or model) to ``path`` as a
-    ``.gltf`` file (JSON, buffers embedded); returns the path.  One sphere per material,
-    each node and mesh named after its material."""
+    ``.gltf`` file (JSON, buffers embedded, textures referenced: :func:`gltf_document`);
+    returns the path.  One sphere per material, each node and mesh named after its material."""
+    from ..text import write_atomic
+
     path = Path(path)
-    doc = gltf_document(materials, rings=rings, segments=segments)
-    path.write_text(json.dumps(doc, indent=1) + "\n")
+    doc = gltf_document(materials, rings=rings, segments=segments, textures=textures)
+    write_atomic(path, json.dumps(doc, indent=1) + "\n")     # whole or not at all
     return path
