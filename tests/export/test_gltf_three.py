@@ -89,7 +89,7 @@ new GLTFLoader().load('%(o)smaterials.gltf', (gltf) => {
   gltf.scene.traverse((o) => { if (o.isMesh) { const m = o.material; mats[m.name] = {
     type: m.type, color: m.color.toArray(), metalness: m.metalness, roughness: m.roughness,
     specularIntensity: m.specularIntensity, specularColor: m.specularColor ? m.specularColor.toArray() : null,
-    anisotropy: m.anisotropy, anisotropyRotation: m.anisotropyRotation,
+    anisotropy: m.anisotropy, anisotropyRotation: m.anisotropyRotation, map: m.map ? m.map.name || 'texture' : null,
     centre: o.getWorldPosition(new THREE.Vector3()).toArray() }; } });
   window.result = { data: btoa(s), mats };
 }, undefined, (e) => { window.result = { error: String(e) }; });
@@ -102,15 +102,17 @@ def missing(why):
     pytest.skip(why)
 
 
-@pytest.fixture(scope="module")
-def rendered(tmp_path_factory):
+def render(gltf: str, files: dict | None = None):
+    """``gltf`` (the file's text) rendered by three.js in headless Chromium, the files it
+    references (``{uri: bytes}``) served beside it: ``(pixels (SIZE, SIZE, 3) top-down, the
+    materials three.js built, the view's centre)``."""
     from playwright.sync_api import sync_playwright
 
     if chromium() is None:
         missing("chromium is not installed (make chromium installs Debian's)")
     if not (THREE / "examples" / "jsm" / "loaders" / "GLTFLoader.js").is_file():
         missing(f"three.js is not installed in {THREE.parent} (make three installs it)")
-    gltf = write_gltf(MATERIALS, tmp_path_factory.mktemp("gltf") / "materials.gltf").read_text()
+    files = files or {}
     cx, cy = 0.5 * SPACING * (COLS - 1), -0.5 * SPACING * (COLS - 1)
     page_text = PAGE % dict(o=ORIGIN, size=SIZE, half=SIZE / (2 * PX), cx=cx, cy=cy)
 
@@ -120,6 +122,8 @@ def rendered(tmp_path_factory):
             return r.fulfill(body=page_text, content_type="text/html")
         if url == ORIGIN + "materials.gltf":
             return r.fulfill(body=gltf, content_type="model/gltf+json")
+        if url[len(ORIGIN):] in files:
+            return r.fulfill(body=files[url[len(ORIGIN):]], content_type="image/png")
         if url.startswith(ORIGIN + "three/"):
             path = THREE / url[len(ORIGIN + "three/"):]
             if path.is_file():
@@ -139,6 +143,11 @@ def rendered(tmp_path_factory):
     assert "error" not in res and errors == [], (res.get("error"), errors)
     px = np.frombuffer(base64.b64decode(res["data"]), dtype=np.uint8).reshape(SIZE, SIZE, 4)[::-1, :, :3]
     return px.astype(float), res["mats"], (cx, cy)
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    return render(write_gltf(MATERIALS, tmp_path_factory.mktemp("gltf") / "materials.gltf").read_text())
 
 
 def sphere_pixels(px, centre, view_centre):
@@ -228,3 +237,28 @@ def test_a_metal_differs_from_a_dielectric_as_expected(rendered):
     _, inside, _, _ = disc("brushed")
     lit = px[inside][px[inside].max(-1) > 10]
     assert np.abs(lit - lit.mean(-1, keepdims=True)).max() <= 1.0
+
+
+def test_a_base_colour_texture_multiplies_the_factor(tmp_path):
+    # a uniform texture of sRGB level 188 (glTF's base colour textures are sRGB: linear 0.5029) on a
+    # Lambertian sphere: its pixels are the model's of base_color times 0.5029, and the untextured
+    # sphere's are the model's of base_color (a texture not loaded or not applied fails the first)
+    import matplotlib.pyplot as plt
+
+    lambert = MATERIALS["lambert"]
+    plt.imsave(tmp_path / "grey.png", np.full((4, 4, 3), 188 / 255.0))
+    gltf = write_gltf({"plain": lambert, "textured": lambert}, tmp_path / "t.gltf",
+                      textures={"textured": {"baseColorTexture": "grey.png"}}).read_text()
+    px, mats, view = render(gltf, {"grey.png": (tmp_path / "grey.png").read_bytes()})
+    assert mats["textured"]["map"] is not None and mats["plain"]["map"] is None
+    level = ((188 / 255 + 0.055) / 1.055) ** 2.4
+    for name, scale in (("plain", 1.0), ("textured", level)):
+        img, n, r2 = sphere_pixels(px, mats[name]["centre"], view)
+        inside = r2 < math.sin(math.radians(60)) ** 2
+        base = np.asarray(lambert["base_color"]) * scale
+        want = expected(plausible.make("gltf-pbr", **{**lambert, "base_color": base}), n)
+        err = np.abs(img[inside] - want[inside])
+        assert err.max() <= 1.5, f"{name}: max {err.max()} levels, mean {err.mean():.2f}"
+        other = expected(plausible.make("gltf-pbr", **{**lambert, "base_color": np.asarray(lambert["base_color"])
+                                                       * (level if scale == 1.0 else 1.0)}), n)
+        assert np.abs(img[inside] - other[inside]).max() > 20
