@@ -53,7 +53,7 @@ def figure(name: str, title: str, source: str, caption: str, renders: bool = Fal
 
 
 #: The figure modules in report order (``materials``: issue 16, the published MERL fits).
-MODULES = ("paper_as", "paper_neumann", "paper_notes", "checks", "lobes", "materials", "compensation")
+MODULES = ("paper_as", "paper_neumann", "paper_notes", "checks", "lobes", "materials", "compensation", "conversion")
 
 
 def _load():
