@@ -144,3 +144,23 @@ def test_a_missing_file_and_a_file_without_materials_are_refused(tmp_path):
         read_mtl(write(tmp_path, "# empty\n"))
     with pytest.raises(ValueError, match="before the first newmtl"):
         read_mtl(write(tmp_path, "Kd 0.5 0.5 0.5\n"))
+
+
+@pytest.mark.parametrize("data, name, note", [
+    # older exporters write Windows-1252: an accented name (0xe9) and an ellipsis (0x85, Latin-1's NEL,
+    # which str.splitlines would take for a line end); before: refused as not UTF-8
+    (b"newmtl caf\xe9 \x85 rouge\nKd 0.5 0.1 0.1\nillum 1\n", "caf\u00e9 \u2026 rouge", "read as Windows-1252"),
+    (b"newmtl caf\x81\nKd 0.5 0.1 0.1\nillum 1\n", "caf\x81", "read as Latin-1"),     # 0x81: not Windows-1252
+    ("newmtl caf\u00e9\r\nKd 0.5 0.1 0.1\r\nillum 1\r\n".encode("utf-16"), "caf\u00e9", "read as UTF-16"),  # BOM
+    ("\ufeffnewmtl caf\u00e9\rKd 0.5 0.1 0.1\rillum 1\r".encode("utf-8"), "caf\u00e9", None)])   # CR line ends
+def test_files_in_the_encodings_of_older_exporters_are_read(tmp_path, data, name, note):
+    (tmp_path / "lib.mtl").write_bytes(data)
+    (m,) = read_mtl(tmp_path / "lib.mtl")
+    assert m.name == name and m.Kd.tolist() == [0.5, 0.1, 0.1] and m.illum == 1
+    assert any(note in n for n in m.notes) if note else not any("UTF-8" in n for n in m.notes)
+
+
+def test_a_binary_file_is_refused_as_not_text(tmp_path):
+    (tmp_path / "lib.mtl").write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR")
+    with pytest.raises(ValueError, match="is not a text file"):
+        read_mtl(tmp_path / "lib.mtl")

@@ -53,6 +53,7 @@ material and the statement, with the allowed range.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -153,21 +154,16 @@ def _illum(where, words):
 def read_mtl(path) -> list[MtlMaterial]:
     """Every ``newmtl`` of the ``.mtl`` file ``path``, in file order.
 
+    The text: UTF-8, UTF-16 with its byte-order mark, else Windows-1252 or Latin-1 (noted; :func:`_text`).
     ValueError for a missing or unreadable file, a statement before the first
     ``newmtl``, a value out of its range (``Kd``, ``Ks`` in [0, 1]; ``Ns`` in
     [0, 1e6]; ``illum`` one of 0-3), two materials of one name, or a file with
     no material.
     """
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig", errors="strict")
-    except FileNotFoundError:
-        raise ValueError(f"MTL file {str(path)!r} not found") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise ValueError(f"MTL file {str(path)!r} cannot be read as text: {e}") from None
+    text, encoding = _text(path)
     out: list[MtlMaterial] = []
     cur = None
-    for ln, raw in enumerate(text.splitlines(), 1):
+    for ln, raw in enumerate(re.split(r"\r\n|\r|\n", text), 1):
         s = raw.split("#", 1)[0].strip()
         if not s:
             continue
@@ -205,11 +201,40 @@ def read_mtl(path) -> list[MtlMaterial]:
         cur.given.add(key)
     if not out:
         raise ValueError(f"MTL file {str(path)!r} defines no material (no newmtl line)")
+    if encoding != "utf-8":
+        for m in out:
+            m.notes.append(f"the file is not UTF-8: read as {encoding}")
     for m in out:
         for key, default in (("Kd", "0"), ("Ks", "0"), ("Ns", "0"), ("illum", "2")):
             if key not in m.given:
                 m.notes.append(f"{key} not given: {default}")
     return out
+
+
+def _text(path) -> tuple[str, str]:
+    """The text of the file ``path`` and its encoding: UTF-16 where it starts with its byte-order
+    mark, else UTF-8 (a byte-order mark skipped), else Windows-1252, else Latin-1 (the encodings of older exporters: every byte is a character, so an
+    accented name reads as one); ValueError for a missing or unreadable file, or one with NUL bytes
+    (not text).  Lines end at ``\\n``, ``\\r\\n`` or ``\\r`` only (not at Latin-1's NEL, 0x85)."""
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise ValueError(f"MTL file {str(path)!r} not found") from None
+    except OSError as e:
+        raise ValueError(f"MTL file {str(path)!r} cannot be read: {e.strerror or e}") from None
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):        # a UTF-16 byte-order mark (Windows' "Unicode")
+        try:
+            return data.decode("utf-16"), "UTF-16"
+        except UnicodeDecodeError as e:
+            raise ValueError(f"MTL file {str(path)!r} cannot be read as UTF-16 (its byte-order mark): {e}") from None
+    if b"\0" in data:
+        raise ValueError(f"MTL file {str(path)!r} is not a text file (it holds NUL bytes)")
+    for encoding, codec in (("utf-8", "utf-8-sig"), ("Windows-1252", "cp1252"), ("Latin-1", "latin-1")):
+        try:
+            return data.decode(codec), encoding
+        except UnicodeDecodeError:
+            continue
+    raise AssertionError("Latin-1 decodes every byte")   # pragma: no cover
 
 
 def _exponent(where, words) -> float:
