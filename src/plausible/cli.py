@@ -628,7 +628,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
                    "blendbsdf-tir, principled), gltf, or a registered model.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
-                   "or .gltf (with --to gltf).")
+                   "or .gltf (with --to gltf); - for standard output (the .gltf's text with --to gltf, else the .json's).")
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
 @click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
@@ -638,11 +638,19 @@ def convert_cmd(source, to, out, metric, as_json):
     SOURCE: a model spec, material:NAME@FIT, a Mitsuba BSDF (.xml, or .json of dicts by name),
     or a Wavefront .mtl file.
     """
+    from pathlib import Path
+
     from .conversion import check_output, convert
 
+    if out == "-" and as_json:
+        _fail("--out - and --json both write to standard output: give --out a file")
     try:
-        check_output(out, to)          # a bad --out is refused before minutes of fitting
+        if out != "-":
+            check_output(out, to)          # a bad --out is refused before minutes of fitting
         res = convert(source, to=to, metric=metric)
+        if out == "-":                     # the file's text alone on stdout: .gltf for glTF, else .json
+            click.echo(res.text(".gltf" if res.to == "gltf" else ".json", Path.cwd()), nl=False)
+            return
         path = res.write(out)
     except ValueError as e:
         _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))

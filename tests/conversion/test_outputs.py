@@ -183,3 +183,13 @@ def test_the_mitsuba_xml_of_a_textured_mtl_loads_from_anywhere(textured, tmp_pat
     want = Path(os.path.relpath(textured / "tex" / "wood.png", tmp_path)).as_posix()
     assert f'<string name="filename" value="{want}"/>' in path.read_text()
     mi.load_file(str(path))                                  # every bitmap found relative to the file
+
+
+def test_out_dash_writes_the_files_text_to_standard_output(tmp_path):
+    # the convention of every command (README): --out - writes to standard output; before, refused
+    r = _cli("lambertian:rd=0.5,0.4,0.3", "--to", "mitsuba:diffuse", "--out", "-")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output) == {"lambertian": {"type": "diffuse", "reflectance": {
+        "type": "rgb", "value": pytest.approx([0.5, 0.4, 0.3], abs=1e-6)}}}
+    r = _cli("lambertian:rd=0.5", "--to", "mitsuba", "--out", "-", "--json")
+    assert r.exit_code == 2 and "--out - and --json both write to standard output" in r.output

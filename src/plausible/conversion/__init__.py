@@ -130,22 +130,26 @@ class Conversion:
         from ..text import write_atomic
 
         p = Path(path)
-        suffix = check_output(p, self.to)
-        where = p.resolve().parent
-        if suffix == ".gltf":
-            from ..export.gltf import gltf_document
-
-            text = json.dumps(gltf_document({c.name: c.result for c in self.items},
-                                            textures=self.gltf_textures(where)), indent=1) + "\n"
-        elif suffix == ".json":
-            text = json.dumps(self.mitsuba_dicts(where), indent=2) + "\n"
-        else:
-            text = mitsuba_xml(self.mitsuba_dicts(where))
+        text = self.text(check_output(p, self.to), p.resolve().parent)
         try:
             write_atomic(p, text)
         except OSError as e:
             raise ValueError(f"out: cannot write {str(path)!r}: {e.strerror or e}") from None
         return p
+
+    def text(self, suffix: str, where=None) -> str:
+        """The text of the output file of ``suffix`` (``.json``, ``.xml``, ``.gltf``: :meth:`write`),
+        texture names relative to the folder ``where`` (None: as the source gives them)."""
+        if suffix == ".gltf":
+            from ..export.gltf import gltf_document
+
+            return json.dumps(gltf_document({c.name: c.result for c in self.items},
+                                            textures=self.gltf_textures(where)), indent=1) + "\n"
+        if suffix == ".json":
+            return json.dumps(self.mitsuba_dicts(where), indent=2) + "\n"
+        if suffix == ".xml":
+            return mitsuba_xml(self.mitsuba_dicts(where))
+        raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {suffix!r}")
 
     def gltf_textures(self, where=None) -> dict:
         """``{material: {glTF texture slot: file}}`` of the textures a ``.gltf`` file references
