@@ -20,7 +20,10 @@ The file: one buffer (positions, normals, tangents of one sphere of radius 1, an
 triangle indices), shared by every mesh; one mesh and one node per material, named after
 it, in rows of ``ceil(sqrt(N))`` spheres 2.5 apart along ``+x`` and ``-y``.  A mesh
 has ``TANGENT`` where its material is anisotropic (the extension's tangent ``t`` is the
-direction of growing azimuth about ``+y``).
+direction of growing azimuth about ``+y``), and ``TEXCOORD_0`` (azimuth and polar angle, 0-1)
+where it has a ``baseColorTexture``: an image referenced by a relative URI, not embedded
+(``textures`` of :func:`gltf_document`; the Khronos glTF 2.0 specification, "Textures",
+"Images": a URI reference, percent-encoded).
 
 >>> from plausible.export.gltf import gltf_document
 >>> doc = gltf_document({"gold": {"base_color": [1.0, 0.77, 0.34], "metallic": 1.0, "roughness": 0.3}})
