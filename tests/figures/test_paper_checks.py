@@ -288,3 +288,17 @@ def test_rmse_from_pair_recovers_the_noise_of_two_independent_renders():
     assert old - rmse > 20 * se                                       # the reference's noise shows
     # the same render twice is no pair: its noise cancels (zero), which the estimate must not hide
     assert rmse_from_pair(a, a) == (0.0, 0.0)
+
+
+def test_a_table_whose_headers_hold_commas_reads_back_with_one_field_per_column(tmp_path):
+    """Fig. 5's columns are named "eq. 21 as printed, (N.V)(N.L), pumped 1x": written with a
+    plain ",".join the header had 13 fields for 9 columns of numbers."""
+    import csv
+
+    cols = {"theta_deg": [0.0, 45.0], "eq. 21 as printed, (N.V)(N.L), pumped 1x": [1.0, 0.5],
+            "eq. 22 (neumann-metal, c = (n + 2)/2pi)": [1.0, 0.75]}
+    Context(tmp_path).table("t", cols)
+    rows = list(csv.reader(open(tmp_path / "t.csv")))
+    assert rows[0] == list(cols)
+    assert [len(r) for r in rows] == [3, 3, 3]
+    assert [float(x) for x in rows[2]] == [45.0, 0.5, 0.75]

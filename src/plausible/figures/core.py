@@ -8,6 +8,7 @@ first use, as :mod:`plausible.registry` imports the models.
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import importlib
@@ -176,8 +177,12 @@ class Context:
         """Plotted data as ``name.csv``: ``columns`` maps header -> 1-D array."""
         keys = list(columns)
         arr = np.column_stack([np.asarray(columns[k], dtype=np.float64).ravel() for k in keys])
-        np.savetxt(self.out / f"{name}.csv", arr, delimiter=",", header=",".join(keys), comments="",
-                   fmt="%.8g")
+        # the csv module quotes a header holding a comma ("eq. 21 as printed, (N.V)(N.L)"): a plain
+        # ",".join gave such a file more header fields than data fields
+        with open(self.out / f"{name}.csv", "w", newline="") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(keys)
+            w.writerows([f"{x:.8g}" for x in row] for row in arr)
         self.items.append(dict(kind="data", file=f"{name}.csv", caption=caption))
 
     def json(self, name: str, obj, caption: str = ""):
