@@ -241,6 +241,9 @@ def test_a_hot_pixel_counts_unless_it_is_hot_again_at_another_seed(tmp_path):
     ok = ctx.image("a", img, rerender=glint)
     assert ctx.measurements[-1]["ok"] is True and ctx.measurements[-1]["measured"] == 0
     assert "as bright again" in ctx.measurements[-1]["note"]
+    # the quantity says that the count is not the definition's alone, and the note gives that count
+    assert "not as bright again at another seed" in ctx.measurements[-1]["quantity"]
+    assert ctx.measurements[-1]["note"].startswith("1 isolated hot pixel(s) by the definition alone")
     ctx.image("b", img, rerender=clean)
     assert ctx.measurements[-1]["ok"] is False and ctx.measurements[-1]["measured"] == 1
     ctx.image("c", img)

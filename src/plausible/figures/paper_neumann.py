@@ -641,7 +641,8 @@ TANK_CAMERA = (1.5, -9.5, 4.5)
         renders=True, exponents=(20.0, 5000.0),
         metals="conductor Fresnel F(L.H) of each metal's tabulated spectral n + i k (Al, Ag, Cu, Au), at every "
                "angle, both rows; spectral rendering (llvm_ad_spectral)",
-        lights="sky + the two point lights as spherical lamps of the same intensity (15 degrees across)")
+        lights="sky + the two point lights as spherical lamps giving the same irradiance (3x as far, 9x the "
+               "intensity, 15 degrees across)")
 def fig8(ctx, exponents, metals, lights):
     from . import scenes as S
 
@@ -697,11 +698,11 @@ def fig8(ctx, exponents, metals, lights):
     ctx.note("Both rows use the same material, the pumped_up plugin with each metal's spectral complex index "
              "(n + i k, src/plausible/data/*_nk.csv) as a conductor Fresnel factor F(L.H): times = 0 (the "
              "reciprocal Phong, top) and times = 1 (bottom), so the rows differ only by the pumping. The point "
-             "lights are spherical lamps of the same intensity three times as far (scenes.lamp): a point light's "
-             "reflection in the n = 5000 lobe is smaller than a pixel and its caustics are fireflies (36 isolated "
-             "hot pixels in the pumped n = 5000 render with point lights). The brightening is measured on the "
-             "pixels entirely on metal (mask render), not on the whole frame (floor and sky diluted it to +3.9 % "
-             "and +5.0 %).")
+             "lights are spherical lamps three times as far, with nine times the intensity (scenes.lamp): a "
+             "point light's reflection in the n = 5000 lobe is smaller than a pixel and its caustics are "
+             "fireflies (36 isolated hot pixels in the pumped n = 5000 render with point lights). The "
+             "brightening is measured on the pixels entirely on metal (mask render), not on the whole frame "
+             "(floor and sky diluted it to +3.9 % and +5.0 %).")
 
 
 
