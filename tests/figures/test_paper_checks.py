@@ -254,8 +254,8 @@ def test_a_hot_pixel_counts_unless_it_is_hot_again_at_another_seed(tmp_path):
 def test_perceptual_checks_hold_when_the_perceptual_fit_wins_and_fail_otherwise():
     from plausible.figures.paper_neumann import perceptual_checks
 
-    ls = {"albedo_max": 0.48, "perceptual": 5.18}
-    pc = {"albedo_max": 0.16, "perceptual": 4.74}   # docs/fitting.md's neumann-metal rows
+    ls = {"albedo_max": 0.1319, "fcos_max": 3.6448, "perceptual": 3.7768}
+    pc = {"albedo_max": 0.0487, "fcos_max": 2.7194, "perceptual": 2.7681}   # neumann-perceptual, 0/30/60 deg
     assert all(_ok(q) for q in perceptual_checks(ls, pc))
     assert not any(_ok(q) for q in perceptual_checks(pc, ls))
 
@@ -327,3 +327,15 @@ def test_normal_albedo_radial_recovers_closed_forms_and_he_torrances_gain():
     assert dd == pytest.approx(0.9946703100367, abs=1e-10)
     assert sp == pytest.approx(0.0054057794708, abs=1e-12)
     assert dd + sp - 1.0 == pytest.approx(7.60895e-5, abs=1e-9)
+
+
+def test_perceptual_check_of_f_cos_fails_when_only_the_albedo_improves():
+    """With 80 deg among the incidences the perceptual fit lowered only the albedo's error
+    (E_f 4.5835 vs 4.5955 least squares: equal to 0.3 %, the f cos error set by one
+    sample no Phong-family lobe can follow); a fit whose E_f is the higher fails."""
+    from plausible.figures.paper_neumann import perceptual_checks
+
+    ls = {"albedo_max": 0.5307, "fcos_max": 4.5955, "perceptual": 5.1263}
+    pc = {"albedo_max": 0.1584, "fcos_max": 4.6100, "perceptual": 4.7684}
+    verdicts = [_ok(q) for q in perceptual_checks(ls, pc)]
+    assert verdicts == [False, True, True]

@@ -712,8 +712,13 @@ def perceptual_checks(least_squares: dict, perceptual: dict) -> list:
     (:func:`plausible.fitting.metrics.errors` dicts): fitted with the perceptual
     metric, the maximal relative error of the albedo (``albedo_max``) and the sum of
     the two maximal relative errors (``perceptual``) are at most the least-squares
-    fit's (each the quantity one fit minimises and the other does not)."""
-    return [dict(quantity="the albedo's maximal relative error, perceptual fit / least-squares fit (<= 1)",
+    fit's (each the quantity one fit minimises and the other does not), and so is the
+    maximal relative error of ``f cos`` (``fcos_max``): "both ... minimized
+    simultaneously"."""
+    return [dict(quantity="the maximal relative error of f cos, perceptual fit / least-squares fit (<= 1)",
+                 measured=perceptual["fcos_max"] / least_squares["fcos_max"], at_most=1.0,
+                 note=f"{perceptual['fcos_max']:.4f} vs {least_squares['fcos_max']:.4f} (log units)"),
+            dict(quantity="the albedo's maximal relative error, perceptual fit / least-squares fit (<= 1)",
                  measured=perceptual["albedo_max"] / least_squares["albedo_max"], at_most=1.0,
                  note=f"{perceptual['albedo_max']:.4f} vs {least_squares['albedo_max']:.4f} (log units)"),
             dict(quantity="E_f + E_a (max relative errors of f cos and of the albedo), perceptual fit / least-squares "
@@ -726,7 +731,7 @@ def perceptual_checks(least_squares: dict, perceptual: dict) -> list:
         "[Sec. 1.1:] \u201cIn perceptual based fitting the albedo should also be considered, and the maximal relative "
         "errors of both the weighted BRDF and of the albedo should be minimized simultaneously. The relative error "
         "corresponds to the logarithmic characteristics of the human vision system.\u201d",
-        model="neumann-metal", reference="cook-torrance:m=0.2:rs=0.9", thetas_deg=(0.0, 30.0, 60.0, 80.0))
+        model="neumann-metal", reference="cook-torrance:m=0.2:rs=0.9", thetas_deg=(0.0, 30.0, 60.0))
 def perceptual(ctx, model, reference, thetas_deg):
     from plausible.fitting import as_target, fit
 
@@ -755,4 +760,8 @@ def perceptual(ctx, model, reference, thetas_deg):
         ctx.measure(**q)
     ctx.note("Errors in log units at the incidences " + ", ".join(f"{t:g}" for t in thetas_deg) + " deg "
              "(plausible.fitting.metrics); one start each. The pumped-up model is not fitted here: every trial "
-             "point would integrate new albedo tables.")
+             "point would integrate new albedo tables. Not 80 deg: there the reference's f cos climbs to 35 toward "
+             "the grazing view, a shape no lobe of the Phong family has, and that one sample sets the maximal "
+             "relative error of f cos for every parameter value (E_f 4.58 perceptual vs 4.60 least squares with 0, "
+             "30, 60, 80 deg): the perceptual fit could then lower only the albedo's error (0.158 vs 0.531), "
+             "buying it with a lobe peak 4.8x the reference's.")
