@@ -339,3 +339,23 @@ def test_perceptual_check_of_f_cos_fails_when_only_the_albedo_improves():
     pc = {"albedo_max": 0.1584, "fcos_max": 4.6100, "perceptual": 4.7684}
     verdicts = [_ok(q) for q in perceptual_checks(ls, pc)]
     assert verdicts == [False, True, True]
+
+
+def test_mirror_radiance_checks_pass_on_eq20s_peaks_and_fail_on_a_controlled_process():
+    """Figs. 3 / 4's radiance statements on the peaks of f cos(theta_L) at 0 / 40 / 80 deg
+    (eq. 20, n = 20, measured): the base darkens at 80 deg (0.174 of normal), pumping
+    lifts that, three pumpings exceed the base's normal peak (Phong 1.56x, Blinn 8.3x),
+    one pumping keeps Phong at it and takes Blinn past it (1.57x).  Peaks that a
+    controlled process would give (never above the base's) fail the 'exceeds' check, and
+    Phong's peaks fail Blinn's 'super-metal' check."""
+    from plausible.figures.paper_neumann import mirror_radiance_checks
+
+    phong = [[3.501, 2.682, 0.608], [3.501, 3.501, 3.035], [3.501, 3.693, 4.760], [3.501, 3.729, 5.473]]
+    blinn = [[1.050, 0.805, 0.182], [1.050, 1.278, 1.645], [1.050, 1.467, 5.082], [1.050, 1.532, 8.750]]
+    assert all(_ok(q) for q in mirror_radiance_checks("Phong", phong))
+    assert all(_ok(q) for q in mirror_radiance_checks("Blinn", blinn))
+    controlled = [[3.501, 2.682, 0.608], [3.501, 3.501, 3.035], [3.501, 3.501, 3.501], [3.501, 3.501, 3.501]]
+    assert [_ok(q) for q in mirror_radiance_checks("Phong", controlled)] == [True, True, False, True]
+    assert [_ok(q) for q in mirror_radiance_checks("Blinn", phong)] == [True, True, True, False]
+    flat = [[1.0, 1.0, 1.0]] * 4     # a mirror that does not darken, and pumping that changes nothing
+    assert [_ok(q) for q in mirror_radiance_checks("Phong", flat)][:3] == [False, False, False]

@@ -406,6 +406,47 @@ def mirror_convergence(levels) -> dict:
                 "(1 - a_(k+1)) / (1 - a_k) over angles and levels", measured=worst, at_most=0.9)
 
 
+def peaks_by_angle(model, angles=RADIANCE_ANGLES) -> list:
+    """The largest output radiance ``f cos(theta_L)`` over the plane of incidence at
+    each light angle of ``angles`` (the curves of the radiance plot)."""
+    view = np.linspace(-89.9, 89.9, 1799)
+    return [float(np.max(output_radiance(model, t, view))) for t in angles]
+
+
+def mirror_radiance_checks(model_name: str, peaks) -> list:
+    """Sec. 3.1's and sec. 5's statements on the output radiance of eq. 20 (figs. 3, 4)
+    as checks; ``peaks[k]`` are :func:`peaks_by_angle` at 0, 40, 80 deg of level ``k``
+    (0: the base).  "the 'Phong and Blinn mirrors' get darker for greater incident
+    angles" (base: peak at 80 deg / at 0 deg <= 0.5), "but the pumping-up reduces this
+    effect" (that ratio at least doubled by one pumping), "after several pumping-up
+    operations the output radiance can significantly exceed" (the last level's peak
+    >= 1.2x the base's at normal incidence: the yardstick figs. 5 and 6 bound by 1);
+    sec. 5: pumping "worked well for the Phong model" (one pumping: <= the base's
+    normal peak) while "the Blinn model showed super-metal characteristics even for
+    moderate increase of the albedo" (one pumping: >= 1.2x)."""
+    p = [np.asarray(x, dtype=np.float64) for x in peaks]
+    base0 = float(p[0][0])
+    dark = float(p[0][-1] / p[0][0])
+    out = [dict(quantity=f"the {model_name} mirror gets darker for greater incident angles: base's peak output "
+                "radiance at 80 deg / at 0 deg", measured=dark, at_most=0.5),
+           dict(quantity="pumping-up reduces this effect: (peak at 80 / at 0 deg) pumped once / the base's",
+                measured=float(p[1][-1] / p[1][0]) / dark, at_least=2.0,
+                note=f"{float(p[1][-1] / p[1][0]):.3f} vs {dark:.3f}"),
+           dict(quantity=f"after several pumpings the output radiance significantly exceeds: pumped {len(p) - 1}x, "
+                "largest peak / the base's at normal incidence", measured=float(np.max(p[-1])) / base0,
+                at_least=1.2, note="peaks at 0 / 40 / 80 deg: " + " / ".join(f"{x:.3f}" for x in p[-1])
+                + f" (base at 0 deg {base0:.3f}); controlled pumping (figs. 5, 6) keeps this <= 1")]
+    once = float(np.max(p[1])) / base0
+    if model_name == "Phong":
+        out.append(dict(quantity="sec. 5, 'this worked well for the Phong model': pumped once, largest peak / the "
+                        "base's at normal incidence", measured=once, at_most=1.0 + 1e-9))
+    else:
+        out.append(dict(quantity="sec. 5, Blinn 'showed super-metal characteristics even for moderate increase of "
+                        "the albedo': pumped once, largest peak / the base's at normal incidence", measured=once,
+                        at_least=1.2))
+    return out
+
+
 def _pumping(ctx, base, n, correction, times, albedo_tol):
     base_name = base
     if ctx.quick:
@@ -452,6 +493,8 @@ def _pumping(ctx, base, n, correction, times, albedo_tol):
     if correction == "max":
         if len(labels) > 2:
             ctx.measure(**mirror_convergence([curves[la] for la in labels[1:]]))
+            for q in mirror_radiance_checks(model_name, [peaks_by_angle(specs[la]) for la in labels]):
+                ctx.measure(**q)
         return
     peaks = [peak_radiance(specs[la]) for la in labels[1:]]
     lv = [curves[la] for la in labels[1:]]
