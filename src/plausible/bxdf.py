@@ -570,5 +570,31 @@ def warps_mixture(ops, choose_a, a, b):
     return mixture(ops, choose_a, a, b)
 
 
-__all__ = ["BxDF", "Lobe", "Params", "Sample", "Param", "above", "as_directions", "vec",
+class OfBase(BxDF):
+    """A model made of another one, ``self.base`` (set by the subclass's ``__init__``),
+    whose reflectance it reweights and whose sampler it keeps (albedo pumping-up,
+    energy compensation): the pdf, the sampler and the integrators' hints are the
+    base's, and the base's kernel data travel with the model's own
+    (:mod:`plausible.kernel_params`).  A subclass that samples otherwise overrides
+    :meth:`_pdf` and :meth:`_sample`."""
+
+    def _kernel_view(self, convert):
+        out = super()._kernel_view(convert)
+        out.base = self.base._kernel_view(convert)
+        return out
+
+    def _pdf(self, ops, wi, wo, q):
+        return self.base._pdf(ops, wi, wo, self.base.q)
+
+    def _sample(self, ops, wi, u, q):
+        return self.base._sample(ops, wi, u, self.base.q)
+
+    def peak_directions(self, wi):
+        return self.base.peak_directions(wi)
+
+    def mirror_cut(self):
+        return self.base.mirror_cut()
+
+
+__all__ = ["BxDF", "OfBase", "Lobe", "Params", "Sample", "Param", "above", "as_directions", "vec",
            "mixture_probabilities", "mixture_f", "mixture_pdf", "mixture_sample", "add_values"]

@@ -178,6 +178,16 @@ def projected_offset(ops, wi, r, phi):
     return (ops.where(inside, ox, 0.0), ops.where(inside, oy, 0.0), ops.where(inside, oz, -1.0))
 
 
+def mixture_weight(ops, a, b):
+    """``a / (a + b)`` (the probability of picking the lobe of weight ``a`` beside one of
+    weight ``b``), 0.5 where both are zero; by ``ops.where``, not a Python ``if``, so that
+    ``a`` and ``b`` may be kernel data (one compiled kernel for every value,
+    :mod:`plausible.kernel_params`)."""
+    s = a + b
+    pos = s > 0
+    return ops.where(pos, a / ops.where(pos, s, 1.0), 0.5)
+
+
 def mixture(ops, choose_a, a, b):
     """Component-wise select between two sampled directions."""
     return (ops.where(choose_a, a[0], b[0]), ops.where(choose_a, a[1], b[1]),

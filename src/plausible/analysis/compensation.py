@@ -28,7 +28,7 @@ import itertools
 import numpy as np
 
 from ..arrays import backend as _backend
-from ..bxdf import BxDF
+from ..bxdf import BxDF, OfBase
 from ..directions import split
 from ..integrals.cache import albedo_table_of
 from ..models.kulla_conty import FRESNEL_PARAMS, KullaConty
@@ -136,7 +136,7 @@ def as_base(base):
 
 # -- the non-reciprocal practice, as a reference -------------------------------------------------
 
-class IncidentScaled(BxDF):
+class IncidentScaled(OfBase):
     """``f / E(wi)``: the base scaled by its albedo at the incidence only (the common
     non-reciprocal fix; its albedo is 1 at every ``wi`` by construction).  Not registered:
     a reference for the figures and the proof that the reciprocity check catches it."""
@@ -154,24 +154,11 @@ class IncidentScaled(BxDF):
     def name(self) -> str:
         return "incident-albedo"
 
-    def _kernel_view(self, convert):
-        out = super()._kernel_view(convert)
-        out.base = self.base._kernel_view(convert)
-        return out
 
     def _f(self, ops, wi, wo, p):
         e = self.table.lookup(ops, wi)
         ok = above(ops, wi, wo) & (e > 0.0)
         return ops.where(ok, self.base._f(ops, wi, wo, self.base.p) / ops.where(ok, e, 1.0), 0.0)
-
-    def _pdf(self, ops, wi, wo, q):
-        return self.base._pdf(ops, wi, wo, self.base.q)
-
-    def _sample(self, ops, wi, u, q):
-        return self.base._sample(ops, wi, u, self.base.q)
-
-    def peak_directions(self, wi):
-        return self.base.peak_directions(wi)
 
 
 # -- the face ----------------------------------------------------------------------------------

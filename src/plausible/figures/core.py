@@ -8,6 +8,7 @@ first use, as :mod:`plausible.registry` imports the models.
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import importlib
@@ -160,8 +161,13 @@ class Context:
             note += f"; {steady} isolated one(s) as bright again (at least half the excess over the 3x3 median) in " \
                     "a render of its neighbourhood with another seed: a glint smaller than a pixel, not noise; not " \
                     "counted"
-        self.measure(f"{name}: isolated hot pixels (luminance > {HOT_FACTOR:g} x its 3x3 median + {HOT_OFFSET:g}, "
-                     "at most one neighbour as bright)", n, at_most=0, note=note)
+        what = f"isolated hot pixels (luminance > {HOT_FACTOR:g} x its 3x3 median + {HOT_OFFSET:g}, at most one " \
+               "neighbour as bright)"
+        if rerender is not None:
+            # the count checked is then not the definition's alone: say so in the quantity itself
+            what = f"fireflies: {what} not as bright again at another seed"
+            note = f"{int(iso.sum())} isolated hot pixel(s) by the definition alone; " + note
+        self.measure(f"{name}: {what}", n, at_most=0, note=note)
         return img
 
     def plot(self, name: str, fig, caption: str = ""):
@@ -176,8 +182,12 @@ class Context:
         """Plotted data as ``name.csv``: ``columns`` maps header -> 1-D array."""
         keys = list(columns)
         arr = np.column_stack([np.asarray(columns[k], dtype=np.float64).ravel() for k in keys])
-        np.savetxt(self.out / f"{name}.csv", arr, delimiter=",", header=",".join(keys), comments="",
-                   fmt="%.8g")
+        # the csv module quotes a header holding a comma ("eq. 21 as printed, (N.V)(N.L)"): a plain
+        # ",".join gave such a file more header fields than data fields
+        with open(self.out / f"{name}.csv", "w", newline="") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(keys)
+            w.writerows([f"{x:.8g}" for x in row] for row in arr)
         self.items.append(dict(kind="data", file=f"{name}.csv", caption=caption))
 
     def json(self, name: str, obj, caption: str = ""):

@@ -256,6 +256,16 @@ def half_sphere(ctx, nu, nv, rs, rd):
                     f"{math.degrees(math.asin(hi)):.0f} deg)", got, want, 4 * se,
                     note="pixel mean vs plausible.albedo averaged over the ring")
         rows.append((lo, hi, got, se, want))
+    # "little loss of energy by the specular term, so any darkening of the sphere is due to the diffuse
+    # component": the two terms' albedos from the centre to the outer ring (64 deg)
+    spec = plausible.make("ashikhmin-shirley-specular", nu=nu, nv=nv, rs=rs)
+    diff = plausible.make("ashikhmin-shirley-diffuse", rs=rs, rd=rd)
+    drop = {k: float(albedo(m, direction(0.0))) - float(albedo(m, direction(math.radians(64.0))))
+            for k, m in (("total", model), ("specular", spec), ("diffuse", diff))}
+    ctx.measure("'any darkening of the sphere is due to the diffuse component': the diffuse term's albedo drop from "
+                "0 to 64 deg / the model's", drop["diffuse"] / drop["total"], at_least=0.9,
+                note=f"drops: model {drop['total']:.4f}, diffuse {drop['diffuse']:.4f}, specular "
+                     f"{drop['specular']:.4f} (negative: the specular term reflects more toward the rim)")
     ctx.tick()
     rows = np.array(rows)
     ctx.table("profile", dict(r_lo=rows[:, 0], r_hi=rows[:, 1], luminance=rows[:, 2], se=rows[:, 3],

@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from .. import fresnel, vec, warps
-from ..bxdf import BxDF
+from ..bxdf import BxDF, OfBase
 from ..integrals.albedo import hemispherical_albedo
 from ..integrals.cache import albedo_table_of, horizon_albedos
 from ..integrals.quadrature import gauss_legendre
@@ -122,7 +122,7 @@ def table_average(table, fn=lambda v: v) -> float:
                       "course Physically Based Shading in Theory and Practice",
                       "Kelemen, Szirmay-Kalos, A microfacet based coupled specular-matte BRDF model with "
                       "importance sampling, Eurographics 2001"))
-class KullaConty(BxDF):
+class KullaConty(OfBase):
     """``f = F(L.H) f_base + F_ms (1 - E(L)) (1 - E(V)) / (pi (1 - E_avg))`` (see the module
     docstring); sampled as a mixture of the base's sampler and a cosine lobe."""
 
@@ -166,7 +166,6 @@ class KullaConty(BxDF):
 
     def _kernel_view(self, convert):
         out = super()._kernel_view(convert)
-        out.base = self.base._kernel_view(convert)
         if isinstance(self.tint, np.ndarray):
             out.tint = convert(self.tint)
         return out
@@ -225,11 +224,6 @@ class KullaConty(BxDF):
     def lobes(self):
         return BxDF.lobes(self)
 
-    def peak_directions(self, wi):
-        return self.base.peak_directions(wi)
-
-    def mirror_cut(self):
-        return self.base.mirror_cut()
 
 
 def check_finite_albedo(base, owner: str, progress=None) -> None:

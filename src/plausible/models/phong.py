@@ -138,12 +138,8 @@ class ModifiedPhong(BxDF):
 
     @staticmethod
     def spec_probability(ops, q):
-        """``ks / (ks + kd)`` (channel means), 0.5 when both are zero; by
-        ``ops.where``, not a Python ``if``, so that parameters may be kernel data
-        (one compiled kernel for every value, :mod:`plausible.kernel_params`)."""
-        s = q.ks + q.kd
-        pos = s > 0
-        return ops.where(pos, q.ks / ops.where(pos, s, 1.0), 0.5)
+        """``ks / (ks + kd)`` (channel means), 0.5 when both are zero (:func:`~plausible.warps.mixture_weight`)."""
+        return warps.mixture_weight(ops, q.ks, q.kd)
 
     def _f(self, ops, wi, wo, p):
         return modified_phong_diffuse(ops, wi, wo, p) + modified_phong_glossy(ops, wi, wo, p)

@@ -52,7 +52,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import fresnel, vec
-from ..bxdf import BxDF
+from ..bxdf import OfBase
 from ..integrals.cache import albedo_table_of, horizon_albedos, spec_of
 from ..params import ModelParam, Param
 from ..registry import register
@@ -120,9 +120,10 @@ def correction(ops, kind, albedos, wi, wo):
           "f* = f / g, g = max(a(L), a(V)) [max] or max(a(L), a(V), N.L, N.V) [controlled], "
           "applied 'times' times.",
           references=("Neumann, Neumann, Szirmay-Kalos, albedo pumping-up, 1999, sec. 3, eq. 16-21",))
-class PumpedUp(BxDF):
+class PumpedUp(OfBase):
     """``f* = F(L.H) f / (g_1 g_2 ... g_times)``, each ``g_k`` built from the albedo
-    of the model pumped ``k - 1`` times (see the module docstring)."""
+    of the model pumped ``k - 1`` times (see the module docstring); sampled as the base
+    (:class:`~plausible.bxdf.OfBase`; the albedo tables enter every kernel as arrays already)."""
 
     PARAMS = (
         ModelParam("base", "reciprocal-phong:ks=1:n=20",
@@ -164,13 +165,6 @@ class PumpedUp(BxDF):
                              f"rs/eta/k have {self.channels}; give them the same count")
         self.channels = chans.pop() if chans else None
 
-    def _kernel_view(self, convert):
-        """Its own data and the base's (:mod:`plausible.kernel_params`); the
-        albedo tables enter every kernel as arrays already."""
-        out = super()._kernel_view(convert)
-        out.base = self.base._kernel_view(convert)
-        return out
-
     def g(self, ops, wi, wo):
         """The total correction of every level (:func:`correction`)."""
         return correction(ops, self.params["correction"],
@@ -183,15 +177,3 @@ class PumpedUp(BxDF):
         kh = vec.half_vector_cos(ops, wi, wo)[1]
         F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
         return ops.where(ok, F * f / ops.where(ok, g, 1.0), 0.0)
-
-    def _pdf(self, ops, wi, wo, q):
-        return self.base._pdf(ops, wi, wo, self.base.q)
-
-    def _sample(self, ops, wi, u, q):
-        return self.base._sample(ops, wi, u, self.base.q)
-
-    def peak_directions(self, wi):
-        return self.base.peak_directions(wi)
-
-    def mirror_cut(self):
-        return self.base.mirror_cut()

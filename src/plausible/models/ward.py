@@ -113,12 +113,8 @@ class Ward(BxDF):
 
     @staticmethod
     def spec_probability(ops, q):
-        """``rs / (rs + rd)`` (channel means), 0.5 when both are zero; by
-        ``ops.where``, not a Python ``if``, so that parameters may be kernel data
-        (one compiled kernel for every value, :mod:`plausible.kernel_params`)."""
-        s = q.rs + q.rd
-        pos = s > 0
-        return ops.where(pos, q.rs / ops.where(pos, s, 1.0), 0.5)
+        """``rs / (rs + rd)`` (channel means), 0.5 when both are zero (:func:`~plausible.warps.mixture_weight`)."""
+        return warps.mixture_weight(ops, q.rs, q.rd)
 
     def _f(self, ops, wi, wo, p):
         return _ward_diffuse(ops, wi, wo, p) + _ward_glossy(ops, wi, wo, p)
