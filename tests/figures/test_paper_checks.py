@@ -223,32 +223,40 @@ def test_report_lists_image_size_and_samples_only_for_renders(tmp_path):
     assert "spp = 128" in render and "resolution = 320" in render
 
 
-def test_a_hot_pixel_counts_unless_it_is_hot_again_at_another_seed(tmp_path):
-    """Context.image's firefly check: a hot pixel whose neighbourhood, rendered again
-    (here: given), shows it hot again is a glint, not counted; one that vanishes is a
-    firefly and fails the check."""
-    pytest.importorskip("mitsuba")
+def test_a_hot_pixel_is_refined_with_more_samples_and_counted_by_the_definition(tmp_path):
+    """Context.image's adaptive sampling: an isolated hot pixel's 7 x 7 neighbourhood,
+    rendered again with REFINE x the samples (here: given), is averaged with the first
+    pass by sample count, and the check counts by the definition on that image.  A
+    firefly (the window comes back clean) is averaged away: (9 + 8 x 0.3) / 9 = 1.267,
+    under the threshold 4 x 0.3 + 0.5 = 1.7; a feature that every pass shows stays hot
+    and fails; without refinement it fails too."""
+    mi = pytest.importorskip("mitsuba")
+    from plausible.figures.core import REFINE
+
     img = np.full((20, 20, 3), 0.3)
     img[5, 12] = 9.0
     ctx = Context(tmp_path)
-
-    def glint(y0, x0, h, w):
-        return img[y0:y0 + h, x0:x0 + w]
+    asked = []
 
     def clean(y0, x0, h, w):
+        asked.append((y0, x0, h, w))
         return np.full((h, w, 3), 0.3)
 
-    ok = ctx.image("a", img, rerender=glint)
+    def same(y0, x0, h, w):
+        return img[y0:y0 + h, x0:x0 + w]
+
+    out = ctx.image("a", img, refine=clean)
+    assert asked == [(2, 9, 7, 7)]                              # the 7 x 7 window about (5, 12)
     assert ctx.measurements[-1]["ok"] is True and ctx.measurements[-1]["measured"] == 0
-    assert "as bright again" in ctx.measurements[-1]["note"]
-    # the quantity says that the count is not the definition's alone, and the note gives that count
-    assert "not as bright again at another seed" in ctx.measurements[-1]["quantity"]
-    assert ctx.measurements[-1]["note"].startswith("1 isolated hot pixel(s) by the definition alone")
-    ctx.image("b", img, rerender=clean)
+    assert out[5, 12, 0] == pytest.approx((9.0 + REFINE * 0.3) / (1 + REFINE), rel=1e-12)
+    assert out[0, 0, 0] == 0.3 and np.count_nonzero(out != img) == 3          # only that pixel changed
+    assert np.array(mi.Bitmap(str(tmp_path / "a.exr")))[5, 12, 0] == pytest.approx(out[5, 12, 0], rel=1e-6)
+    assert "1 isolated hot pixel(s) of the first pass" in ctx.measurements[-1]["note"]
+    ctx.image("b", img, refine=same)
     assert ctx.measurements[-1]["ok"] is False and ctx.measurements[-1]["measured"] == 1
     ctx.image("c", img)
-    assert ctx.measurements[-1]["measured"] == 1
-    assert ok.shape == img.shape
+    assert ctx.measurements[-1]["ok"] is False and ctx.measurements[-1]["measured"] == 1
+    assert img[5, 12, 0] == 9.0                                 # the caller's array is left as it was
 
 
 def test_perceptual_checks_hold_when_the_perceptual_fit_wins_and_fail_otherwise():

@@ -13,7 +13,7 @@ from plausible.analysis import albedo_curve
 from plausible.plotting import default_thetas
 from plausible.progress import within
 
-from .core import CURVE_TOL, figure
+from .core import CURVE_TOL, REFINE, figure
 from .lobes import plane_f
 
 SRC = "Neumann, Neumann & Szirmay-Kalos 1999"
@@ -705,10 +705,11 @@ def fig8(ctx, exponents, metals, lights):
 
                 img = S.render(mi, _tank_scene(mi, ctx.out, mat, res, spp), seed=0)
                 label = f"{'pumped once' if pumped else 'reciprocal Phong'}, n = {n:g}"
-                def again(y0, x0, h, w, mat=mat):
-                    return S.render(mi, _tank_scene(mi, ctx.out, mat, res, spp, crop=(y0, x0, h, w)), seed=7)
+                def more(y0, x0, h, w, mat=mat):     # the window with REFINE x the samples, another seed
+                    return S.render(mi, _tank_scene(mi, ctx.out, mat, res, spp * REFINE, crop=(y0, x0, h, w)),
+                                    seed=7)
 
-                ctx.image(f"tank-{'pumped' if pumped else 'phong'}-{n:g}", img, caption=label, rerender=again)
+                img = ctx.image(f"tank-{'pumped' if pumped else 'phong'}-{n:g}", img, caption=label, refine=more)
                 imgs.append(img)
                 labels.append(label)
                 lum = S.luminance(img)
