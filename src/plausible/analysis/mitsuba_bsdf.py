@@ -136,6 +136,33 @@ def _flags(mi, bsdf):
     return comps, smooth, delta, trans
 
 
+def _aligned(a) -> np.ndarray:
+    """``a`` (components ``(k, n)``) as float32 with each component contiguous and starting on a
+    64-byte boundary: Dr.Jit's kernels load an input with the alignment its address allows, so a
+    component at another offset gave another kernel for the same formula (one more compilation
+    for every second number of directions)."""
+    k, n = a.shape
+    stride = -(-n // 16) * 16
+    buf = np.empty(k * stride + 16, dtype=np.float32)
+    off = (-buf.ctypes.data % 64) // 4
+    out = buf[off:off + k * stride].reshape(k, stride)[:, :n]
+    out[...] = a
+    return out
+
+
+def _rows(dr, v) -> np.ndarray:
+    """A Mitsuba value (``Float``, ``Color3f``, ``Vector3f``) as a NumPy array ``(components, n)``,
+    read component by component after one ``dr.eval``: ``.numpy()`` of a nested array launches
+    a copy kernel with its size as a literal, compiled again for every new number of directions
+    (mitsuba-builtins compiled 422 kernels, most of them these copies)."""
+    if not hasattr(v, "numpy"):
+        return np.asarray(v).reshape(1, -1)
+    if dr.depth_v(v) <= 1:
+        return np.asarray(v.numpy()).reshape(1, -1)
+    dr.eval(v)
+    return np.stack([np.asarray(c.numpy()) for c in v])
+
+
 class MitsubaBSDF(ForeignBxDF):
     """The contract of :mod:`plausible.bxdf` around a ``mitsuba.BSDF`` (see the module docstring).
 
@@ -215,7 +242,7 @@ class MitsubaBSDF(ForeignBxDF):
         """plausible's local directions, rows ``(n, 3)`` -> the ones Mitsuba sees: float32,
         mirrored for the back side, as contiguous components ``(3, n)`` (one conversion,
         from which Dr.Jit copies each component without a strided gather)."""
-        w = np.array(np.asarray(w).T, dtype=np.float32, order="C")
+        w = _aligned(np.asarray(w).T)
         if self.side == "back":
             w[2] = -w[2]
         return w
@@ -227,8 +254,7 @@ class MitsubaBSDF(ForeignBxDF):
         """Mitsuba's value read back once, as float64 rows ``(n,)`` or ``(n, channels)``,
         divided by ``scale`` (shape ``(n,)``) if given (in float64: the float32 values
         convert exactly, so this is the division of their float64 copies)."""
-        a = np.asarray(v.numpy() if hasattr(v, "numpy") else v)
-        a = a.reshape(-1, n)
+        a = _rows(self._dr, v).reshape(-1, n)
         a = a.T if a.shape[0] > 1 else a[0]
         if scale is None:
             return a.astype(np.float64)
@@ -262,7 +288,7 @@ class MitsubaBSDF(ForeignBxDF):
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
         a, uu, shape = self._sample_rows(wi, u)
-        uu = np.array(np.minimum(uu, 1 - 2.0 ** -24).T, dtype=np.float32, order="C")   # components (3, n)
+        uu = _aligned(np.minimum(uu, 1 - 2.0 ** -24).T)   # components (3, n)
         tail = (self.channels,) if self.channels else ()
         wo = np.zeros((len(a), 3))
         wo[:, 2] = -1.0
@@ -273,7 +299,8 @@ class MitsubaBSDF(ForeignBxDF):
             wi32 = self._local(a[s:e])
             bs, w = self.bsdf.sample(self._ctx(mask), self._si(wi32), mi.Float(uu[0, s:e]),
                                      mi.Point2f(uu[1, s:e], uu[2, s:e]))
-            o = np.asarray(bs.wo.numpy(), dtype=np.float64).reshape(3, -1).T
+            self._dr.eval(bs.wo, bs.pdf, w)     # one kernel for the three (each .numpy() would launch its own)
+            o = _rows(self._dr, bs.wo).astype(np.float64).T
             if self.side == "back":
                 o[:, 2] = -o[:, 2]
             # Mitsuba's float32 direction as it is (|wo| = 1 +- 1e-7): renormalising it in float64
