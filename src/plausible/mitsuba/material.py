@@ -14,11 +14,45 @@ says so).
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..catalogue.entry import Material
 
 PLUGIN = Material.OWNER
 #: The registry entry ``material`` (:mod:`plausible.catalogue.entry`).
 INFO = Material.info
+
+
+def _as_data(mi, model):
+    """``model`` with its parts' parameters, scales and lobe probabilities as opaque Dr.Jit values
+    (kernel inputs, :mod:`plausible.kernel_params`) instead of constants: the instances of one fitted
+    model then trace to the same code, which Dr.Jit compiles once for a scene of many materials (the
+    atlas's 100 spheres: one callable, not 100).  A model whose hooks need its values as numbers keeps
+    them as constants (``mi.Color3f`` colours)."""
+    import drjit as dr
+
+    def convert(v):
+        if isinstance(v, np.ndarray):
+            return mi.Color3f(*[dr.opaque(mi.Float, float(x)) for x in np.ravel(v)])
+        return dr.opaque(mi.Float, float(v))
+
+    try:
+        view = model._kernel_view(convert)
+        _trace(mi, view)
+        return view
+    except Exception:  # noqa: BLE001 - hooks that branch on a value: constants, as before
+        return model.with_backend_colors(lambda a: mi.Color3f(*[float(x) for x in a]))
+
+
+def _trace(mi, model):
+    """Trace (not run) the hooks on one lane: raises where a hook cannot take data parameters."""
+    from ..arrays.ops import drjit_ops
+
+    ops = drjit_ops(mi.Float)
+    w = (mi.Float(0.3), mi.Float(0.2), mi.Float(0.9327379053088815))
+    model._f(ops, w, w, model.p)
+    model._pdf(ops, w, w, model.q)
+    model._sample(ops, w, (mi.Float(0.5), mi.Float(0.5), mi.Float(0.5)), model.q)
 
 
 def make_material_plugin_class():
@@ -37,7 +71,7 @@ def make_material_plugin_class():
                                  f"(e.g. llvm_ad_rgb), not {mi.variant()!r}")
             super().__init__(props)
             # the generic plugin keeps its model in its ParamState (plausible.mitsuba.plugin)
-            self.state.model = self.state.model.with_backend_colors(lambda a: mi.Color3f(*[float(x) for x in a]))
+            self.state.model = _as_data(mi, self.state.model)
 
         def to_string(self):
             return f"{PLUGIN}[{self.model!r}]"
