@@ -248,3 +248,51 @@ def test_workers_get_one_blas_thread_unless_the_caller_set_it(tmp_path, monkeypa
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
     run(tmp_path / "b", only=["blas", "blas2"], jobs=2)
     assert seen(tmp_path / "b", "blas") == "2" and os.environ["OPENBLAS_NUM_THREADS"] == "2"
+
+
+def _threads(ctx):
+    import drjit
+
+    ctx.steps(1)
+    ctx.json("threads", {"drjit": drjit.thread_count()})
+    ctx.tick()
+
+
+def test_workers_share_the_cores_among_their_drjit_threads(tmp_path, monkeypatch):
+    """Each worker process gets the cores divided by the workers (at least one) as Dr.Jit threads:
+    a thread per core in each would oversubscribe them, and idle Dr.Jit threads spin."""
+    import importlib
+
+    pytest.importorskip("drjit")
+    report = importlib.import_module("plausible.figures.report")
+    for n in ("t1", "t2"):
+        monkeypatch.setitem(F.FIGURES, n, F.Figure(n, "Threads", "test", "caption", _threads, {}))
+    run(tmp_path, only=["t1", "t2"], jobs=2)
+    got = [json.loads((tmp_path / n / "threads.json").read_text())["drjit"] for n in ("t1", "t2")]
+    assert got == [report.worker_threads(2)] * 2
+    monkeypatch.setattr(report, "_cores", lambda: 16)
+    assert (report.worker_threads(2), report.worker_threads(1), report.worker_threads(32)) == (8, 16, 1)
+    monkeypatch.setattr(report, "_cores", lambda: 2)
+    assert report.worker_threads(2) == 1
+
+
+def test_an_exr_is_written_with_one_drjit_thread(tmp_path):
+    """Mitsuba 3.9's OpenEXR writer waits forever with one Dr.Jit thread; write_image lends it two
+    and gives the pool back its size (run in a child process, so a hang fails by its timeout)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import plausible
+
+    pytest.importorskip("mitsuba")
+    code = ("import drjit as dr, numpy as np\n"
+            "from plausible.figures import scenes as S\n"
+            "S.mitsuba(); dr.set_thread_count(1)\n"
+            f"S.write_image({str(tmp_path / 'img')!r}, np.full((4, 5, 3), 0.5))\n"
+            "print(dr.thread_count())\n")
+    env = dict(os.environ, PYTHONPATH=str(Path(plausible.__file__).resolve().parents[1]))   # this tree's plausible
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split()[-1] == "1"
+    assert (tmp_path / "img.exr").exists() and (tmp_path / "img.png").exists()

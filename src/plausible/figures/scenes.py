@@ -9,6 +9,7 @@ written twice: linear HDR (OpenEXR, the rendered radiance) and tone-mapped
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -176,6 +177,24 @@ def tonemap(img: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     return np.round(s * 255).astype(np.uint8)
 
 
+@contextmanager
+def _pool_of_two():
+    """At least two Dr.Jit worker threads within the block: Mitsuba 3.9's OpenEXR writer waits
+    forever with one (``plausible figures`` gives each of its worker processes one thread per
+    core it shares, :func:`plausible.figures.report.worker_threads`)."""
+    import drjit as dr
+
+    n = dr.thread_count()
+    if n >= 2:
+        yield
+        return
+    dr.set_thread_count(2)
+    try:
+        yield
+    finally:
+        dr.set_thread_count(n)
+
+
 def write_image(path_stem: Path, img: np.ndarray, exposure: float = 1.0) -> list:
     """Write ``stem.exr`` (linear float32) and ``stem.png`` (sRGB); returns both paths."""
     import mitsuba as mi
@@ -186,7 +205,8 @@ def write_image(path_stem: Path, img: np.ndarray, exposure: float = 1.0) -> list
     if img.ndim == 2:
         img = img[..., None].repeat(3, axis=-1)
     exr = path_stem.with_suffix(".exr")
-    mi.Bitmap(np.ascontiguousarray(img[..., :3]), pixel_format=mi.Bitmap.PixelFormat.RGB).write(str(exr))
+    with _pool_of_two():
+        mi.Bitmap(np.ascontiguousarray(img[..., :3]), pixel_format=mi.Bitmap.PixelFormat.RGB).write(str(exr))
     png = path_stem.with_suffix(".png")
     imsave(png, tonemap(img[..., :3], exposure))
     return [exr, png]
