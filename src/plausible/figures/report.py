@@ -227,18 +227,18 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
 
 # -- worker processes -----------------------------------------------------------------
 
-#: Seconds each figure takes in a default run (2-core machine: its seconds in a worker of a two-worker
-#: ``make demo`` at load 11-16, 2 December 03:02 UTC, divided by 6.3, the ratio of that run to one on an
-#: idle machine; ``as-convergence`` has no 1024-spp reference render since that session), for
-#: the order in which worker processes take them: the longest first, so that no long figure starts last.
-#: Only the order depends on these; a figure not listed (the lobe figures but one: 0.4-1.6 CPU-s) counts as
-#: 1 s, and the ``seconds`` of a previous run in the output folder take precedence.
-EXPECTED_SECONDS = {"compensation": 30, "checks": 27, "neumann-fig8": 19, "notes-cornell": 18, "materials-check": 17,
-                    "as-gold": 17, "as-three-views": 16, "mitsuba-builtins": 14, "as-red-spheres": 13,
-                    "materials-atlas": 12, "neumann-fig1": 7.4, "neumann-fig5": 7.3, "neumann-fig6": 6.8,
-                    "as-lambert-vs-as": 6.4, "as-cylinder": 5.3, "as-half-sphere": 5.1, "as-convergence": 4.7,
-                    "as-furnace": 3.7, "neumann-perceptual": 3.2, "neumann-fig3": 1.5, "neumann-fig7": 1.5,
-                    "neumann-fig4": 1.3}
+#: Seconds each figure takes in a default run (2-core machine: its CPU seconds, one Dr.Jit thread as in a
+#: worker of ``make demo``, empty kernel cache, all figures in one process, 2 December 07:10 UTC), for the
+#: order in which worker processes take them: the longest first, so that no long figure starts last (before
+#: ``convert-legacy`` was listed it was made last, 5 s with the other worker idle).  Only the order depends
+#: on these; a figure not listed (the lobe figures: 0.2-0.9 s) counts as 1 s, and the ``seconds`` of a
+#: previous run in the output folder take precedence.
+EXPECTED_SECONDS = {"checks": 19.1, "materials-check": 14.3, "compensation": 13.4, "notes-cornell": 11.9,
+                    "materials-atlas": 11.6, "neumann-fig8": 11.2, "as-red-spheres": 9, "as-gold": 8.6,
+                    "as-three-views": 8.5, "convert-legacy": 5.8, "as-lambert-vs-as": 5.5, "as-cylinder": 5.5,
+                    "neumann-fig1": 4.5, "mitsuba-builtins": 4.4, "as-furnace": 4.1, "neumann-fig5": 4,
+                    "as-half-sphere": 3.2, "as-convergence": 3.1, "neumann-fig6": 2.7, "neumann-fig4": 2.5,
+                    "neumann-fig3": 2.3, "neumann-perceptual": 1.8, "lobe-kulla-conty": 1.5}
 
 
 #: Figures made right after another one by the same worker process: follower -> leader.  The leader
