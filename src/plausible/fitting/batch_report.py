@@ -20,6 +20,7 @@ from .. import registry, vec
 from ..arrays.ops import NP
 from ..plotting import _plt
 from .batch import ERROR_KEYS, load_results
+from ..text import write_atomic
 
 #: Direction toward the light of the sphere renders (view along +z).
 LIGHT = np.array([-0.45, 0.55, 0.70]) / np.linalg.norm([-0.45, 0.55, 0.70])
@@ -191,7 +192,7 @@ def write_report(results, out, *, spheres=(), size: int = 96) -> Path:
             except ValueError as e:
                 parts.append(f"<p class='failed'>spheres not rendered: {esc(str(e))}</p>")
     path = out / "index.html"
-    path.write_text("\n".join(parts) + "\n")
+    write_atomic(path, "\n".join(parts) + "\n")
     return path
 
 
