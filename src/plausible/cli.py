@@ -16,7 +16,7 @@ from rich.table import Table
 from . import registry
 from .analysis import albedo_curve, check as run_check, direction
 from .progress import reporting, silent, within
-from .text import fmt
+from .text import fmt, write_atomic
 
 console = Console()
 
@@ -722,7 +722,7 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
     console.print(f"{escape(out)}: {sum(table.key(j) in rows for j in all_jobs)} of {len(all_jobs)} conversions",
                   soft_wrap=True)
     if md:
-        Path(md).write_text(table.markdown(rows))
+        write_atomic(md, table.markdown(rows))
         console.print(f"wrote {escape(md)} ({len(rows)} rows)")
 
 

@@ -86,9 +86,6 @@ def html_table(caption: str, header, rows) -> str:
     return f"<table><caption>{escape(str(caption))}</caption><tr>{head}</tr>{body}</table>"
 
 
-__all__ = ["fmt", "html_table", "jsonable", "shorten"]
-
-
 def write_atomic(path, text: str) -> None:
     """Write ``text`` to ``path`` whole or not at all: into a temporary file beside it,
     then renamed over it (``os.replace``, atomic on POSIX and Windows).  An error or an
@@ -107,3 +104,6 @@ def write_atomic(path, text: str) -> None:
         except OSError:
             pass
         raise
+
+
+__all__ = ["fmt", "html_table", "jsonable", "shorten", "write_atomic"]

@@ -72,3 +72,32 @@ def test_a_diffuse_part_takes_its_closed_form_and_agrees_with_the_quadrature():
         np.testing.assert_allclose(got.value, ref.value, rtol=0, atol=1e-6)
         np.testing.assert_array_equal(got.value, np.asarray(lam.params["rd"], dtype=np.float64))
     assert np.all(exact(np.array([0.6, 0.0, -0.8])).value == 0.0)
+
+
+def test_the_tables_are_written_whole_and_an_interrupt_leaves_the_docs_as_they_were(row, tmp_path, monkeypatch):
+    """write_tables writes materials-table.md and .csv, and the summary between the markers
+    of an existing materials.md (the user's own text around them kept); Ctrl-C while the
+    files are being replaced leaves every file as it was and no temporary file behind."""
+    import csv
+
+    import plausible.text
+    from plausible.analysis.materials import BEGIN, END, write_tables
+
+    doc = tmp_path / "materials.md"
+    doc.write_text(f"my notes\n{BEGIN}\nold\n{END}\nmore notes\n")
+    written = write_tables([row], tmp_path)
+    assert {p.name for p in written} == {"materials-table.md", "materials-table.csv", "materials.md"}
+    text = doc.read_text()
+    assert text.startswith(f"my notes\n{BEGIN}\n") and text.endswith(f"{END}\nmore notes\n") and "old" not in text
+    rows = list(csv.reader((tmp_path / "materials-table.csv").open(newline="")))
+    assert rows[1][:2] == ["nickel", "ngan2005/ward-duer"] and float(rows[1][3]) == pytest.approx(row.max_albedo)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+
+    def interrupted(src, dst):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(plausible.text.os, "replace", interrupted)
+    other = check_model(Sum([plausible.make("lambertian", rd=0.5)]), "grey", "test", GRID)
+    with pytest.raises(KeyboardInterrupt):
+        write_tables([other], tmp_path)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -164,6 +164,12 @@ def test_sphere_of_lambert_is_cosine_over_pi():
     n = np.stack([x, y, np.sqrt(np.clip(1 - r2, 0, None))], -1)
     expected = np.where(r2 < 1, np.clip(n @ LIGHT, 0, None) / math.pi, 0.0)
     assert np.max(np.abs(img - expected)) < 1e-12
+    # rgb: each channel its own reflectance times the same cosine / pi; a grey model in all three
+    rd = np.array([0.8, 0.3, 0.1])
+    rgb = render_sphere(plausible.make("lambertian", rd=list(rd)), 48, rgb=True)
+    assert rgb.shape == (48, 48, 3) and np.max(np.abs(rgb - expected[..., None] * rd)) < 1e-12
+    grey = render_sphere(plausible.make("lambertian", rd=1.0), 48, rgb=True)
+    assert np.array_equal(grey, np.repeat(img[..., None], 3, axis=-1))
 
 
 def test_report_names_the_best_model(tmp_path):

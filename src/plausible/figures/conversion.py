@@ -76,7 +76,8 @@ def _band(curves, thetas):
 
 
 def _sphere_error(img, ref):
-    """Mean |img - ref| over the lit disc, relative to the mean of ``ref``."""
+    """Mean |img - ref| of the channel means over the lit disc, relative to the mean of ``ref``."""
+    img, ref = (a.mean(axis=-1) if a.ndim == 3 else a for a in (img, ref))
     lit = ref > 0
     return float(np.abs(img - ref)[lit].mean() / max(ref[lit].mean(), 1e-12))
 
@@ -123,12 +124,12 @@ def _measure(ctx, m, s, c, thumb, curves, thetas, axes):
     from plausible.conversion.mitsuba import _load
     from plausible.fitting.batch_report import render_sphere
 
-    imgs = [render_sphere(s.model, 96, LIGHT), render_sphere(_load(c.params), 96, LIGHT),
-            render_sphere(_load(thumb), 96, LIGHT)]
-    top = max(float(imgs[0].max()), 1e-6)
+    imgs = [render_sphere(s.model, 96, LIGHT, rgb=True), render_sphere(_load(c.params), 96, LIGHT, rgb=True),
+            render_sphere(_load(thumb), 96, LIGHT, rgb=True)]
+    top = max(float(imgs[0].max()), 1e-6)       # one exposure for the three: the source's brightest channel
     for ax, img, t in zip(axes[:3], imgs, (f"{m.name}: as read", f"converted: {c.target}",
                                            "rule of thumb: principled,\nroughness sqrt(2/(Ns+2))")):
-        ax.imshow(np.clip(img / top, 0, 1) ** (1 / 2.2), cmap="gray", vmin=0, vmax=1)
+        ax.imshow(np.clip(img / top, 0, 1) ** (1 / 2.2), vmin=0, vmax=1)
         ax.set_title(t, fontsize=8)
         ax.axis("off")
     src, conv, rule = curves

@@ -20,15 +20,17 @@ from .. import registry, vec
 from ..arrays.ops import NP
 from ..plotting import _plt
 from .batch import ERROR_KEYS, load_results
+from ..text import write_atomic
 
 #: Direction toward the light of the sphere renders (view along +z).
 LIGHT = np.array([-0.45, 0.55, 0.70]) / np.linalg.norm([-0.45, 0.55, 0.70])
 
 
-def render_sphere(model, size: int = 96, light=LIGHT) -> np.ndarray:
+def render_sphere(model, size: int = 96, light=LIGHT, rgb: bool = False) -> np.ndarray:
     """Radiance ``f(L, V) cos(theta_L)`` of a unit sphere lit by a directional
     light of unit irradiance (normal incidence), seen orthographically along
-    ``-z``: shape ``(size, size)`` (channel mean), zero outside the disc.
+    ``-z``: shape ``(size, size)`` (channel mean), or ``(size, size, 3)`` with
+    ``rgb`` (a grey model's value in each channel), zero outside the disc.
 
     At each pixel the shading frame is ``vec.frame`` about the normal, so the
     tangent ``u`` follows that frame (isotropic models do not depend on it).
@@ -48,12 +50,16 @@ def render_sphere(model, size: int = 96, light=LIGHT) -> np.ndarray:
 
     wl, wv = local(light), local(np.array([0.0, 0.0, 1.0]))
     ok = (wl[:, 2] > 1e-6) & (wv[:, 2] > 1e-6)
-    img = np.zeros((size, size))
-    vals = np.zeros(len(n))
+    img = np.zeros((size, size, 3) if rgb else (size, size))
+    vals = np.zeros((len(n), 3) if rgb else len(n))
     if np.any(ok):
         f = np.asarray(model.eval(wl[ok], wv[ok]))
-        f = f.mean(axis=-1) if f.ndim == 2 else f
-        vals[ok] = f * wl[ok, 2]
+        if rgb:
+            f = np.broadcast_to(f[:, None] if f.ndim == 1 else f, (len(f), 3))
+            vals[ok] = f * wl[ok, 2][:, None]
+        else:
+            f = f.mean(axis=-1) if f.ndim == 2 else f
+            vals[ok] = f * wl[ok, 2]
     img[inside] = vals
     return img
 
@@ -191,7 +197,7 @@ def write_report(results, out, *, spheres=(), size: int = 96) -> Path:
             except ValueError as e:
                 parts.append(f"<p class='failed'>spheres not rendered: {esc(str(e))}</p>")
     path = out / "index.html"
-    path.write_text("\n".join(parts) + "\n")
+    write_atomic(path, "\n".join(parts) + "\n")
     return path
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis import albedo_curve, direction
-from ..text import jsonable
+from ..text import jsonable, write_atomic
 from ..plotting import _plt, default_thetas, plot_albedo_curves
 
 PLANE_THETAS_DEG = (0.0, 30.0, 60.0, 75.0)
@@ -79,6 +79,6 @@ def write_plots(result, out_dir, points: int = 24, progress=None) -> list:
     curves.append((f"fit {result.model!r}", th, albedo_curve(result.model, th, progress=progress)))
     paths.append(Path(plot_albedo_curves(curves, out / "albedo.png", title="Directional albedo: target and fit")))
     # non-finite numbers as strings ("nan"): bare NaN is not JSON
-    (out / "fit.json").write_text(json.dumps(jsonable(result.to_dict()), indent=1, allow_nan=False))
+    write_atomic(out / "fit.json", json.dumps(jsonable(result.to_dict()), indent=1, allow_nan=False))
     paths.append(out / "fit.json")
     return paths
