@@ -361,7 +361,7 @@ def _print_summary(reports, verdicts):
 
 
 def _default_jobs() -> int:
-    from .analysis.materials import default_jobs
+    from .analysis.suite import default_jobs
 
     return default_jobs()
 
@@ -396,7 +396,7 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
         _fail(f"no fit set {'of ' + ', '.join(keys) + ' ' if keys else ''}has the material(s) {', '.join(names)}")
     tick = silent if as_json else _bar()
     t = tick(len(work), "checking published fits")
-    rows = M.check_fits(keys, names, quick=quick, jobs=jobs or M.default_jobs(), progress=t)
+    rows = M.check_fits(keys, names, quick=quick, jobs=jobs or _default_jobs(), progress=t)
     bad = [r for r in rows if r.gains_energy or not r.reciprocal]
     if out_dir:
         written = M.write_tables(rows, out_dir)
@@ -878,10 +878,8 @@ def figures(out, only, spp, resolution, quick, force, list_only, jobs):
     try:    # unknown names and an unwritable folder fail before anything is made
         only = list(dict.fromkeys(F.get(n).name for n in only))
         check_writable_dir(out, "--out", create=True)
-        from .figures.report import default_jobs
-
         res = F.run(out, only=only or None, spp=spp, resolution=resolution, quick=quick, force=force,
-                    console=console, progress=_bar(), jobs=jobs or default_jobs())
+                    console=console, progress=_bar(), jobs=jobs or _default_jobs())
     except ValueError as e:
         _fail(str(e))
     failed = [n for n, m in res.items() if m["status"] != "ok"]

@@ -270,9 +270,9 @@ def test_workers_share_the_cores_among_their_drjit_threads(tmp_path, monkeypatch
     run(tmp_path, only=["t1", "t2"], jobs=2)
     got = [json.loads((tmp_path / n / "threads.json").read_text())["drjit"] for n in ("t1", "t2")]
     assert got == [report.worker_threads(2)] * 2
-    monkeypatch.setattr(report, "_cores", lambda: 16)
+    monkeypatch.setattr(report, "usable_cores", lambda: 16)
     assert (report.worker_threads(2), report.worker_threads(1), report.worker_threads(32)) == (8, 16, 1)
-    monkeypatch.setattr(report, "_cores", lambda: 2)
+    monkeypatch.setattr(report, "usable_cores", lambda: 2)
     assert report.worker_threads(2) == 1
 
 

@@ -27,7 +27,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -211,17 +210,6 @@ def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, q
     return rows
 
 
-def default_jobs() -> int:
-    """Worker processes for :func:`check_fits` from the command line: the cores
-    this process may use, at most 2 (Dr.Jit's kernels use every core already;
-    a second process keeps them busy while the other does its NumPy work)."""
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        n = os.cpu_count() or 1
-    return max(1, min(2, n))
-
-
 def summary(rows) -> list[dict]:
     """Per fit set: how many fits, how many gain energy, the largest albedo and
     where, the median of the largest albedos, the largest asymmetry."""
@@ -293,4 +281,4 @@ def write_tables(rows, out) -> list[Path]:
 
 __all__ = ["FitCheck", "QUICK_TOL", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits",
            "closed_form_albedo",
-           "check_model", "default_jobs", "markdown", "summary", "work_list", "write_tables"]
+           "check_model", "markdown", "summary", "work_list", "write_tables"]

@@ -3,7 +3,25 @@ each model's defaults plus variants at the extremes its parameters declare."""
 
 from __future__ import annotations
 
+import os
+
 from .. import registry
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity; the machine's count elsewhere)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def default_jobs() -> int:
+    """Worker processes of the commands that spread work over processes (``check --all``,
+    ``check --materials``, ``figures``): the usable cores, at most 2 (Dr.Jit's kernels use
+    every core already; a second process keeps them busy while the other runs Python and
+    NumPy)."""
+    return max(1, min(2, usable_cores()))
 
 
 def variants(name: str, max_variants: int = 4) -> list[dict]:

@@ -29,6 +29,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
+from ..analysis.suite import usable_cores
 from ..integrals.albedo import remembering
 from ..progress import start
 from ..text import fmt
@@ -151,13 +152,6 @@ def _report(console, name, m):
     if m["status"] != "ok":
         console.print(f"[red]figure {escape(name)} failed:[/red]\n{escape(m.get('error', ''))}")
     console.print(f"{escape(name):<22} {m['status']} {m['seconds']} s")
-
-
-def default_jobs() -> int:
-    """Worker processes of ``plausible figures``: the cores this process may use, at
-    most 2 (each figure's kernels and renders use every core already; a second
-    process keeps them busy while the other runs Python and NumPy)."""
-    return max(1, min(2, _cores()))
 
 
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
@@ -291,20 +285,13 @@ def _environment(values: dict):
             os.environ.pop(k, None)
 
 
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
-
-
 def worker_threads(jobs: int) -> int:
     """Dr.Jit worker threads of each of ``jobs`` figure processes: the cores shared out, at least
     one.  Dr.Jit's default, a thread per core in every process, oversubscribes the cores, and its
     idle threads wait for the next launch by spinning: the ``checks`` figure alone (warm kernel
     cache, 2 cores) took 17.1 CPU-s in 8.8 s with two threads and 12.0 CPU-s in 11.7 s with one, and
     in ``make demo`` the other process needs those CPU seconds."""
-    return max(1, _cores() // max(1, jobs))
+    return max(1, usable_cores() // max(1, jobs))
 
 
 def _set_threads(n):
