@@ -327,3 +327,18 @@ def test_a_hook_that_needs_float_parameters_runs_with_constants(rng):
     assert_rel(got, np.exp(-0.25) * wo[:, 2], 1e-15)
     assert backend.structure_of(m) in backend._CONSTANTS and m not in backend._NUMPY_ONLY
     assert backend.kernel_key(m)[0] == "constants"
+
+
+def test_aligned_rows_start_on_the_alignment_and_keep_their_values():
+    """backend.aligned (the quadrature kernels' inputs, the Mitsuba adapter's components): every
+    row contiguous, starting at a multiple of ALIGN bytes, whatever NumPy's allocator gave; the
+    values and dtype as asked; a 1-D input stays 1-D."""
+    from plausible.arrays.backend import ALIGN, aligned
+
+    rng = np.random.default_rng(3)
+    for x, dt in [(np.arange(5.0), np.float64), (np.arange(37), np.uint32), (rng.random((3, 41)), np.float32),
+                  (rng.random((3, 1000)), np.float32)]:
+        for _ in range(4):                      # several allocations: several starting addresses
+            a = aligned(x, dt)
+            assert a.dtype == dt and a.shape == x.shape and np.array_equal(a, x.astype(dt))
+            assert all(r.ctypes.data % ALIGN == 0 and r.flags.c_contiguous for r in np.atleast_2d(a))

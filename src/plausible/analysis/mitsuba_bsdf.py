@@ -56,6 +56,7 @@ import math
 
 import numpy as np
 
+from ..arrays.backend import aligned
 from ..bxdf import Sample
 from ..directions import CHUNK, check_block, as_array, check_directions, norm2
 from ..mitsuba.variant import VARIANTS, ensure_variant
@@ -134,20 +135,6 @@ def _flags(mi, bsdf):
     delta = int(F.DeltaReflection) | int(F.Delta1D) & int(F.Reflection)
     trans = int(F.Transmission) | int(F.Null)
     return comps, smooth, delta, trans
-
-
-def _aligned(a) -> np.ndarray:
-    """``a`` (components ``(k, n)``) as float32 with each component contiguous and starting on a
-    64-byte boundary: Dr.Jit's kernels load an input with the alignment its address allows, so a
-    component at another offset gave another kernel for the same formula (one more compilation
-    for every second number of directions)."""
-    k, n = a.shape
-    stride = -(-n // 16) * 16
-    buf = np.empty(k * stride + 16, dtype=np.float32)
-    off = (-buf.ctypes.data % 64) // 4
-    out = buf[off:off + k * stride].reshape(k, stride)[:, :n]
-    out[...] = a
-    return out
 
 
 def _rows(dr, v) -> np.ndarray:
@@ -242,7 +229,7 @@ class MitsubaBSDF(ForeignBxDF):
         """plausible's local directions, rows ``(n, 3)`` -> the ones Mitsuba sees: float32,
         mirrored for the back side, as contiguous components ``(3, n)`` (one conversion,
         from which Dr.Jit copies each component without a strided gather)."""
-        w = _aligned(np.asarray(w).T)
+        w = aligned(np.asarray(w).T, np.float32)     # each component on its own aligned row
         if self.side == "back":
             w[2] = -w[2]
         return w
@@ -288,7 +275,7 @@ class MitsubaBSDF(ForeignBxDF):
     def sample(self, wi, u, mask=None) -> Sample:
         mi = self._mi
         a, uu, shape = self._sample_rows(wi, u)
-        uu = _aligned(np.minimum(uu, 1 - 2.0 ** -24).T)   # components (3, n)
+        uu = aligned(np.minimum(uu, 1 - 2.0 ** -24).T, np.float32)   # components (3, n)
         tail = (self.channels,) if self.channels else ()
         wo = np.zeros((len(a), 3))
         wo[:, 2] = -1.0

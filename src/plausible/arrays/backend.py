@@ -699,6 +699,28 @@ def _sample(model, shape, horizon, wi_in, u_in):
     return wo, weight, L.numpy(pdf, n).reshape(shape), bad
 
 
-__all__ = ["AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "choose",
+#: The alignment (bytes) of the arrays :func:`aligned` makes: 16 float64 lanes, the widest packet.
+ALIGN = 128
+
+
+def aligned(x, dtype) -> np.ndarray:
+    """``x`` as an array of ``dtype`` whose rows (the last axis; a 1-D ``x`` is one row) are each
+    contiguous and start at a multiple of :data:`ALIGN` bytes (a view into a slightly larger
+    buffer).  Dr.Jit maps such memory without a copy and writes an input's alignment into the
+    kernel: an address NumPy's allocator placed elsewhere would give another kernel for the same
+    formula (a compilation per new call)."""
+    x = np.asarray(x, dtype=dtype)
+    rows = x.reshape(-1, x.shape[-1] if x.ndim else 1)
+    k, n = rows.shape
+    per = ALIGN // np.dtype(dtype).itemsize
+    stride = -(-n // per) * per
+    buf = np.empty(k * stride + per, dtype=dtype)
+    off = (-buf.ctypes.data % ALIGN) // np.dtype(dtype).itemsize
+    out = buf[off:off + k * stride].reshape(k, stride)[:, :n]
+    out[...] = rows
+    return out[0] if x.ndim <= 1 else out.reshape(x.shape[:-1] + (n,))
+
+
+__all__ = ["ALIGN", "AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "aligned", "choose",
            "data_leaves", "drjit_available", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "lane_divmod",
            "pdf_fused", "requested", "run", "sample_fused", "structure_of", "use"]

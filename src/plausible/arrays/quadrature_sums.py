@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import _dr, _is_jit, _NotJit, kernel_view
+from .backend import _dr, _is_jit, _NotJit, aligned, kernel_view
 
 
 # -- quadrature sums on Dr.Jit ------------------------------------------------------------
@@ -73,30 +73,30 @@ def _tensor_sums(model, kind, grids, c, per_phi):
     cols = int(npp.sum())
     owner = np.repeat(np.arange(len(grids)), npp)
 
-    # Every array enters from NumPy memory aligned to 128 bytes (:func:`_aligned`): Dr.Jit maps
+    # Every array enters from NumPy memory aligned to 128 bytes (:func:`~plausible.arrays.backend.aligned`): Dr.Jit maps
     # it without a copy and writes its alignment into the kernel, which would otherwise vary
     # with the address NumPy's allocator gives (a compilation per new call).
     def per_lane(x):
-        return F(_aligned(np.repeat(x, c) if c > 1 else x, np.float64))
+        return F(aligned(np.repeat(x, c) if c > 1 else x, np.float64))
 
     def per_lane_u(x):
-        return U(_aligned(np.repeat(x, c) if c > 1 else x, np.uint32))
+        return U(aligned(np.repeat(x, c) if c > 1 else x, np.uint32))
 
     phi = np.concatenate([g[3] for g in grids])
     cp, sp = per_lane(np.cos(phi)), per_lane(np.sin(phi))
     wis = np.array([g[0] for g in grids], dtype=np.float64)
     wi = tuple(per_lane(wis[owner, k]) for k in range(3))
     row0, count = per_lane_u(t_off[owner]), per_lane_u(nt[owner])
-    chan = U(_aligned(np.tile(np.arange(c), cols), np.uint32)) if c > 1 else dr.zeros(U, 1)
+    chan = U(aligned(np.tile(np.arange(c), cols), np.uint32)) if c > 1 else dr.zeros(U, 1)
     th = np.concatenate([g[1] for g in grids])
-    theta = F(_aligned(th, np.float64))
-    theta_w = F(_aligned(np.concatenate([g[2] for g in grids]), np.float64))
+    theta = F(aligned(th, np.float64))
+    theta_w = F(aligned(np.concatenate([g[2] for g in grids]), np.float64))
     mv = kernel_view(model, dr, F, chan, c)
     if half:   # the half-vector frame: h at (tmin + s tmax, phi), wo its mirror image of wi
         tm = per_lane(np.concatenate([g[6] for g in grids]))
         t0 = per_lane(np.concatenate([np.zeros(len(g[3])) if g[5] is None else g[5] for g in grids]))
     else:
-        st_tab, ct_tab = F(_aligned(np.sin(th), np.float64)), F(_aligned(np.cos(th), np.float64))
+        st_tab, ct_tab = F(aligned(np.sin(th), np.float64)), F(aligned(np.cos(th), np.float64))
 
     def node(i):
         """``g`` times the polar weight at the lane's azimuth and its grid's polar node ``i``."""
@@ -132,22 +132,6 @@ def _tensor_sums(model, kind, grids, c, per_phi):
         return [v[a:a + n, 0] for a, n in zip(starts, npp)]
     sums = np.add.reduceat(v, starts, axis=0)
     return [x if model.channels and kind == "f" else float(x[0]) for x in sums]
-
-
-#: The alignment (bytes) of the arrays :func:`_aligned` makes: 16 float64 lanes, the widest packet.
-ALIGN = 128
-
-
-def _aligned(x, dtype) -> np.ndarray:
-    """``x`` as a contiguous 1-D array of ``dtype`` whose address is a multiple of :data:`ALIGN`
-    (a view into a slightly larger buffer)."""
-    x = np.asarray(x, dtype=dtype).ravel()
-    size = np.dtype(dtype).itemsize
-    buf = np.empty(x.size + ALIGN // size, dtype=dtype)
-    off = (-buf.ctypes.data % ALIGN) // size
-    out = buf[off:off + x.size]
-    out[...] = x
-    return out
 
 
 __all__ = ["MAX_LANES", "tensor_sums"]
