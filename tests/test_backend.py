@@ -94,8 +94,8 @@ def test_request_rule_keyword_then_context_then_environment(monkeypatch):
 
 def test_bad_backend_names_are_refused_with_the_choices(monkeypatch):
     m = plausible.make("lambertian")
-    with pytest.raises(ValueError, match=r"backend must be one of auto, numpy, drjit; got 'cuda'"):
-        m.eval([0, 0, 1], [0, 0, 1], backend="cuda")
+    with pytest.raises(ValueError, match=r"backend must be one of auto, numpy, drjit, llvm, cuda; got 'metal'"):
+        m.eval([0, 0, 1], [0, 0, 1], backend="metal")
     monkeypatch.setenv(backend.ENV, "jax")
     with pytest.raises(ValueError, match=r"PLAUSIBLE_BACKEND must be one of .*got 'jax'"):
         m.eval([0, 0, 1], [0, 0, 1])
@@ -342,3 +342,39 @@ def test_aligned_rows_start_on_the_alignment_and_keep_their_values():
             a = aligned(x, dt)
             assert a.dtype == dt and a.shape == x.shape and np.array_equal(a, x.astype(dt))
             assert all(r.ctypes.data % ALIGN == 0 and r.flags.c_contiguous for r in np.atleast_2d(a))
+
+
+# -- Dr.Jit's devices: LLVM and CUDA (issue 42) ------------------------------------------
+
+
+def test_drjit_runs_on_the_first_device_found_and_a_named_one_is_obeyed(monkeypatch):
+    """``drjit`` and ``auto`` take CUDA where it runs, else LLVM; ``llvm``/``cuda`` are obeyed."""
+    monkeypatch.setattr(backend, "devices", lambda: ("cuda", "llvm"))
+    monkeypatch.setattr(backend, "device_available", lambda name: True)
+    assert backend.device("drjit") == "cuda" and backend.device("auto") == "cuda"
+    assert backend.device("llvm") == "llvm"
+    monkeypatch.setattr(backend, "devices", lambda: ("llvm",))
+    assert backend.device("drjit") == "llvm"
+
+
+def test_a_device_that_does_not_run_is_refused_with_its_cause(monkeypatch):
+    monkeypatch.setattr(backend, "device_available", lambda name: name == "llvm")
+    monkeypatch.setattr(backend, "devices", lambda: ("llvm",))
+    m = plausible.make("lambertian")
+    with pytest.raises(ValueError, match=r"backend 'cuda' .*no NVIDIA GPU or driver found; Dr.Jit devices here: llvm"):
+        m.eval([0, 0, 1], [[0, 0, 1]], backend="cuda")
+    monkeypatch.setenv(backend.ENV, "cuda")
+    with pytest.raises(ValueError, match=r"backend 'cuda'"):
+        plausible.albedo(m, [0, 0, 1])
+
+
+@needs_drjit
+def test_the_llvm_device_by_name_gives_the_drjit_numbers(rng):
+    """``backend="llvm"`` is the Dr.Jit path on the CPU: the NumPy values to 1e-12 (the same
+    formulas, another array type), and the kernel runs on LLVM arrays."""
+    m = plausible.make("ashikhmin-shirley", nu=30.0, nv=300.0)
+    wi, wo = random_upper(rng, 64, 0.05), random_upper(rng, 64, 0.05)
+    ref = m.eval(wi, wo, backend="numpy")
+    assert np.allclose(m.eval(wi, wo, backend="llvm"), ref, rtol=1e-12, atol=0)
+    with backend.use("llvm"):
+        assert backend.jit_module().__name__ == "drjit.llvm"

@@ -124,8 +124,76 @@ class _Group(click.Group):
             ctx.exit(130)
 
 
+def _version(ctx, param, value):
+    """``--version``: the version, then where this machine computes and renders (issue 42)."""
+    if not value or ctx.resilient_parsing:
+        return
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .arrays import backend
+    from .mitsuba import variant
+
+    try:
+        ver = version("plausible")
+    except PackageNotFoundError:   # pragma: no cover - a source tree without metadata
+        ver = "unknown"
+    click.echo(f"plausible, version {ver}")
+    click.echo("float64 backends: numpy" + "".join(f", {d} (Dr.Jit)" for d in backend.devices())
+               + f"; 'drjit' and 'auto' use {backend.devices()[0] if backend.devices() else 'numpy'}")
+    have = variant.available()
+    try:
+        pick = variant.preferred("rgb")
+    except ValueError:
+        pick = "none"
+    click.echo(f"Mitsuba variants: {', '.join(have) or 'none (pip install plausible[render])'}; renders use {pick}")
+    ctx.exit(0)
+
+
+def _set_variant(ctx, param, value):
+    """``--variant``: the Mitsuba device or RGB variant of every render of this command."""
+    if value is None:
+        return value
+    from .mitsuba import variant
+
+    try:
+        variant.prefer(value)
+    except ValueError as e:
+        raise click.BadParameter(str(e), ctx=ctx, param=param)
+    return value
+
+
+def _set_backend(ctx, param, value):
+    """``--backend``: the float64 backend (``$PLAUSIBLE_BACKEND``) of this command."""
+    if value is None:
+        return value
+    import os
+
+    from .arrays import backend
+
+    os.environ[backend.ENV] = value
+    try:
+        if value in backend.DEVICES or value == "drjit":
+            backend.device(value)
+    except ValueError as e:
+        raise click.BadParameter(str(e), ctx=ctx, param=param)
+    return value
+
+
+#: ``--variant``, on the group and on the commands that render.
+VARIANT_OPT = click.option(
+    "--variant", metavar="NAME", expose_value=False, is_eager=True, callback=_set_variant,
+    help="Mitsuba device or variant for renders: auto (CUDA where a GPU is found, else LLVM), cuda, llvm, "
+         "scalar, or an RGB variant such as cuda_ad_rgb ($PLAUSIBLE_VARIANT).")
+
+
 @click.group(cls=_Group, context_settings=dict(help_option_names=["-h", "--help"]))
-@click.version_option(package_name="plausible")
+@click.option("--version", is_flag=True, expose_value=False, is_eager=True, callback=_version,
+              help="Show the version, the float64 backends and the Mitsuba variants of this machine, and exit.")
+@VARIANT_OPT
+@click.option("--backend", type=click.Choice(["auto", "numpy", "drjit", "llvm", "cuda"]), expose_value=False,
+              callback=_set_backend,
+              help="Array backend of the float64 library and analysis ($PLAUSIBLE_BACKEND): drjit is CUDA "
+                   "where a GPU is found, else LLVM.")
 @click.pass_context
 def main(ctx):
     """Physically plausible BRDFs: evaluate, sample, check, fit, export and render.
@@ -836,6 +904,7 @@ class _BatchBar:
 @click.option("--host", default="127.0.0.1", show_default=True,
               help="Address to bind (localhost by default; another address exposes the explorer to the network).")
 @click.option("--no-browser", is_flag=True, help="Do not open the page in a browser.")
+@VARIANT_OPT
 def explore(port, host, no_browser):
     """Interactive BRDF explorer in the browser (lit sphere, lobes, albedo, verdict, exports)."""
     from .explorer import bind, serve
@@ -862,6 +931,7 @@ def explore(port, host, no_browser):
 @click.option("--list", "list_only", is_flag=True, help="List the figures and exit.")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
               help="Worker processes making figures side by side (default: the cores available, at most 2).")
+@VARIANT_OPT
 def figures(out, only, spp, resolution, quick, force, list_only, jobs):
     """Reproduce the papers' figures as a browsable report (OUT/index.html).
 

@@ -29,10 +29,22 @@ def scale(a, s):
     return (a[0] * s, a[1] * s, a[2] * s)
 
 
-def normalize(ops, a):
-    """``a / |a|``; a zero vector stays zero (never NaN)."""
+def normalize(ops, a, divide: bool = False):
+    """``a / |a|``; a zero vector stays zero (never NaN).
+
+    ``divide=True`` divides each component by ``|a|`` instead of multiplying it by ``1 / |a|``:
+    for a direction that a kernel both returns and goes on using (a BSDF's sampled ``wo``, whose
+    density the same kernel computes).  On CUDA the PTX assembler may contract a product into a
+    following sum (``fma``, one rounding), so ``wi + wo`` in the sampling kernel would see the
+    unrounded ``wo`` while ``pdf()`` sees the stored one; at grazing incidence, where ``|wi + wo|``
+    is a few float32 units of ``wo``, that changed the half vector and the density 400-fold
+    (measured on an H200, docs/backends.md).  A quotient is never contracted."""
     n2 = dot(a, a)
-    inv = ops.where(n2 > 0, 1.0 / ops.sqrt(ops.where(n2 > 0, n2, 1.0)), 0.0)
+    pos = n2 > 0
+    if divide:
+        n = ops.sqrt(ops.where(pos, n2, 1.0))
+        return tuple(ops.where(pos, c / n, 0.0) for c in a)
+    inv = ops.where(pos, 1.0 / ops.sqrt(ops.where(pos, n2, 1.0)), 0.0)
     return scale(a, inv)
 
 

@@ -7,8 +7,10 @@ one of two backends of the same formulas (on Dr.Jit, ``eval``/``pdf``/``sample``
 check and normalise their raw input inside the kernel: :func:`eval_fused`):
 
 * ``"numpy"`` -- :data:`plausible.arrays.ops.NP`, one temporary array per operation;
-* ``"drjit"`` -- :func:`plausible.arrays.ops.drjit_ops` on ``drjit.llvm.Float64``: the
-  hooks are traced once per call into one LLVM kernel (float64, all cores),
+* ``"drjit"`` -- :func:`plausible.arrays.ops.drjit_ops` on Dr.Jit's ``Float64`` of the
+  device in force (:func:`device`: ``drjit.cuda`` where an NVIDIA GPU and its driver
+  are found, else ``drjit.llvm``): the
+  hooks are traced once per call into one kernel (float64; all cores on LLVM),
   compiled on first use and then taken from Dr.Jit's kernel cache (in memory,
   and on disk in ``~/.drjit``) whenever the formula's shape and constants are
   the same.  Parameters enter as kernel data, not constants
@@ -20,13 +22,17 @@ The rule (see ``docs/backends.md``):
 
 1. the ``backend=`` keyword of ``eval``/``pdf``/``sample``, else the innermost
    :func:`use` block, else the environment variable ``PLAUSIBLE_BACKEND``, else
-   ``"auto"``, names the request: ``"auto"``, ``"numpy"`` or ``"drjit"``;
+   ``"auto"``, names the request: ``"auto"``, ``"numpy"``, ``"drjit"``, or one of Dr.Jit's
+   devices by name, ``"llvm"`` (the CPU) or ``"cuda"`` (an NVIDIA GPU);
 2. ``"auto"`` picks Dr.Jit when it is installed with a working LLVM backend
    and the call has at least :data:`AUTO_MIN_ROWS` direction pairs
    (:data:`AUTO_MIN_NODES` quadrature nodes; :data:`AUTO_MIN_NEW` for a model
    structure not yet compiled in this process; below that, tracing and
    compiling cost more than NumPy's arithmetic), NumPy otherwise;
-3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`;
+3. ``"drjit"`` without Dr.Jit raises :class:`ValueError`, and so does ``"llvm"`` or
+   ``"cuda"`` where that device does not run; ``"drjit"`` and ``"auto"`` run on CUDA
+   where it is available, else on LLVM (:func:`device`): the same kernels, traced from
+   the same formulas, with another array type;
 4. a model whose hooks do not run on Dr.Jit arrays (one that calls NumPy
    directly, such as a measured MERL table) runs on NumPy whatever was asked:
    the first failing call is repeated on NumPy and the model is remembered.
@@ -55,7 +61,9 @@ import numpy as np
 #: The environment variable naming the default request.
 ENV = "PLAUSIBLE_BACKEND"
 #: Allowed requests.
-CHOICES = ("auto", "numpy", "drjit")
+CHOICES = ("auto", "numpy", "drjit", "llvm", "cuda")
+#: Dr.Jit's devices, in the order ``"drjit"`` and ``"auto"`` prefer them.
+DEVICES = ("cuda", "llvm")
 #: ``auto`` uses Dr.Jit for ``eval``/``pdf``/``sample`` from this many direction
 #: pairs per call.  Measured on the development machine (docs/backends.md): with
 #: the kernel compiled, Dr.Jit is as fast as NumPy from about 4,000 pairs and
@@ -143,18 +151,51 @@ def eager():
 
 
 @lru_cache(maxsize=None)
-def drjit_available() -> bool:
-    """Dr.Jit is importable and its LLVM backend runs (libLLVM found)."""
+def device_available(name: str) -> bool:
+    """Dr.Jit is importable and its backend ``name`` (``"llvm"``: libLLVM found; ``"cuda"``:
+    an NVIDIA GPU with its driver) runs a float64 kernel."""
     try:
-        import drjit as dr
-        from drjit.llvm import Float64
+        import importlib
 
-        if not dr.has_backend(dr.JitBackend.LLVM):
+        import drjit as dr
+
+        if not dr.has_backend(getattr(dr.JitBackend, name.upper())):
             return False
-        x = Float64([1.0, 2.0])
+        x = importlib.import_module(f"drjit.{name}").Float64([1.0, 2.0])
         return float(dr.sum(x * x)[0]) == 5.0
-    except Exception:  # noqa: BLE001 - any failure (missing package, no libLLVM) means "not available"
+    except Exception:  # noqa: BLE001 - any failure (missing package, no libLLVM, no GPU) means "not available"
         return False
+
+
+def devices() -> tuple:
+    """Dr.Jit's devices that run on this machine, preferred first (a subset of :data:`DEVICES`)."""
+    return tuple(d for d in DEVICES if device_available(d))
+
+
+def drjit_available() -> bool:
+    """Dr.Jit runs on at least one device here (LLVM or CUDA)."""
+    return bool(devices())
+
+
+def device(backend: str | None = None) -> str:
+    """The Dr.Jit device a Dr.Jit call of the request in force runs on: ``"cuda"`` or
+    ``"llvm"`` as asked, else the first of :func:`devices` (CUDA where a GPU is found).
+    Raises :class:`ValueError` naming what is missing where the request cannot run."""
+    req = requested(backend)
+    if req in DEVICES:
+        if not device_available(req):
+            have = ", ".join(devices()) or "none"
+            raise ValueError(f"backend {req!r} was asked for ({ENV} or backend=), but Dr.Jit's {req.upper()} "
+                             f"backend does not run on this machine ("
+                             + ("no NVIDIA GPU or driver found" if req == "cuda" else "libLLVM not found")
+                             + f"; Dr.Jit devices here: {have}); use backend 'auto', 'drjit' or 'numpy'")
+        return req
+    found = devices()
+    if not found:
+        raise ValueError(f"backend 'drjit' was asked for ({ENV} or backend=), but Dr.Jit with an LLVM or CUDA "
+                         f"backend is not available; install the 'render' extra (pip install "
+                         f"'plausible[render]') or use backend 'numpy' or 'auto'")
+    return found[0]
 
 
 def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AUTO_MIN_ROWS,
@@ -165,11 +206,8 @@ def choose(rows: int, model=None, backend: str | None = None, min_rows: int = AU
     req = requested(backend)
     if req == "numpy" or rows == 0 or (model is not None and model in _NUMPY_ONLY):
         return "numpy"
-    if req == "drjit":
-        if not drjit_available():
-            raise ValueError(f"backend 'drjit' was asked for ({ENV} or backend=), but Dr.Jit with "
-                             f"its LLVM backend is not available; install the 'render' extra "
-                             f"(pip install 'plausible[render]') or use backend 'numpy' or 'auto'")
+    if req == "drjit" or req in DEVICES:
+        device(req)         # raises where the device asked for does not run
         return "drjit"
     key = None if model is None else (kernel, kernel_key(model))
     if _EAGER.get():
@@ -279,13 +317,20 @@ def kernel_log():
 
 # -- Dr.Jit evaluation of the hooks ------------------------------------------------------
 
+def jit_module(backend: str | None = None):
+    """``drjit.cuda`` or ``drjit.llvm``: the array types of :func:`device`."""
+    import importlib
+
+    return importlib.import_module(f"drjit.{device(backend)}")
+
+
 def _dr():
     import drjit as dr
-    from drjit.llvm import Float64, UInt32
 
     from .ops import drjit_ops
 
-    return dr, Float64, UInt32, drjit_ops(Float64)
+    m = jit_module()
+    return dr, m.Float64, m.UInt32, drjit_ops(m.Float64)
 
 
 class _Lanes:
@@ -317,7 +362,7 @@ class _Lanes:
         bad)`` (:func:`plausible.directions.unit_lanes`, or the identity with a check
         for ``u``).  ``a`` enters without a copy: Dr.Jit maps contiguous host memory."""
         dr, F = self.dr, self.Float64
-        T = F if a.dtype == np.float64 else self.dr.llvm.Float32
+        T = F if a.dtype == np.float64 else jit_module().Float32
         flat = T(a.reshape(-1))
         return check(self.ops, tuple(F(dr.gather(T, flat, self.row * 3 + k)) for k in range(3)))
 
@@ -721,6 +766,6 @@ def aligned(x, dtype) -> np.ndarray:
     return out[0] if x.ndim <= 1 else out.reshape(x.shape[:-1] + (n,))
 
 
-__all__ = ["ALIGN", "AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "aligned", "choose",
-           "data_leaves", "drjit_available", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "lane_divmod",
+__all__ = ["ALIGN", "AUTO_MIN_NEW", "AUTO_MIN_NODES", "AUTO_MIN_ROWS", "CHOICES", "DEVICES", "ENV", "FUSED_MAX_LANES", "PairKernel", "aligned", "choose",
+           "data_leaves", "device", "device_available", "devices", "drjit_available", "jit_module", "eval_fused", "kernel_key", "kernel_log", "kernel_view", "lane_divmod",
            "pdf_fused", "requested", "run", "sample_fused", "structure_of", "use"]

@@ -90,7 +90,7 @@ _DR_CACHE: dict[str, SimpleNamespace] = {}
 def drjit_ops(float_type=None) -> SimpleNamespace:
     """The Dr.Jit namespace (imported lazily: Dr.Jit is an optional dependency).
 
-    ``float_type`` (e.g. ``drjit.llvm.Float64`` or ``mi.Float``) is the array
+    ``float_type`` (e.g. ``drjit.llvm.Float64``, ``drjit.cuda.Float64`` or ``mi.Float``) is the array
     type that ``where`` gives its result when both branches are Python
     numbers (``dr.select`` would otherwise default to single precision).
     """
@@ -121,8 +121,13 @@ def drjit_ops(float_type=None) -> SimpleNamespace:
         return tuple(dr.if_stmt(tuple(c), ~keep, lambda *a: tuple(fn(*a)), lambda *a: a))
 
     def table(values):
-        # a 1-D table of constants for :func:`gather` (float_type, else Float64 of LLVM)
-        t = float_type if float_type is not None else dr.llvm.Float64
+        # a 1-D table of constants for :func:`gather` (float_type, else Float64 of the device in force)
+        if float_type is not None:
+            t = float_type
+        else:
+            from .backend import jit_module
+
+            t = jit_module().Float64
         return t(np.ascontiguousarray(values, dtype=np.float64).ravel())
 
     def gather(tab, index):

@@ -57,8 +57,23 @@ def input_key(fig, *, resolution, spp, quick, src=None) -> str:
     except PackageNotFoundError:   # pragma: no cover
         ver = "0"
     blob = json.dumps(dict(name=fig.name, params=fig.params, resolution=resolution, spp=spp, quick=quick,
-                           version=ver, source=src or source_hash()), sort_keys=True, default=str)
+                           version=ver, source=src or source_hash(), variant=render_variant(fig)),
+                      sort_keys=True, default=str)
     return hashlib.sha1(blob.encode()).hexdigest()
+
+
+def render_variant(fig):
+    """The Mitsuba RGB variant a rendering figure runs on (:func:`plausible.mitsuba.variant.preferred`:
+    CUDA where a GPU is found, ``plausible figures --variant``); None for a figure that renders
+    nothing, or where Mitsuba cannot render (the figure then fails and says why)."""
+    if not fig.renders:
+        return None
+    try:
+        from ..mitsuba.variant import preferred
+
+        return preferred("rgb")
+    except ValueError:
+        return None
 
 
 def _cached(d: Path, key: str):
@@ -129,7 +144,8 @@ def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict
                       progress=lambda total, label="", _n=name: start(progress, total, _n))
         t0 = time.time()
         m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
-                 key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders)
+                 key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders,
+                 variant=render_variant(fig))
         try:
             fig.fn(ctx, **fig.params)
             m["status"] = "ok"
@@ -478,8 +494,10 @@ def write_index(out: Path, figs: dict) -> Path:
         parts.append(f"<h2 id='{e(n)}'>{e(m.get('title', n))}</h2>")
         parts.append(f"<p><b>{e(m.get('source', ''))}</b></p><blockquote>{e(m.get('caption', ''))}</blockquote>")
         params = dict(m.get("params", {}))
-        if m.get("renders", True):   # image size and samples only where the section renders
+        if m.get("renders", True):   # image size, samples and Mitsuba variant only where the section renders
             params.update(resolution=m.get("resolution"), spp=m.get("spp"))
+            if m.get("variant"):
+                params.update(variant=m["variant"])
         parts.append("<p>Parameters: " + ", ".join(f"<code>{e(k)} = {e(str(v))}</code>" for k, v in params.items())
                      + f" &middot; made in {m.get('seconds', '?')} s</p>")
         if m.get("status") != "ok":

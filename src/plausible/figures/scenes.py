@@ -14,21 +14,26 @@ from pathlib import Path
 
 import numpy as np
 
-RGB = "llvm_ad_rgb"
-SPECTRAL = "llvm_ad_spectral"
+#: The kinds of Mitsuba variant the figures render with; the device is
+#: :func:`plausible.mitsuba.variant.preferred`'s (CUDA where a GPU is found, else LLVM;
+#: ``plausible figures --variant``).
+RGB = "rgb"
+SPECTRAL = "spectral"
 
 #: Gold's colour at normal incidence (linear sRGB of the conductor reflectance
 #: of Au from plausible.spectra), used for the "golden" spheres of A-S fig. 3.
 GOLD_FALLBACK = (1.0, 0.71, 0.29)
 
 
-def mitsuba(variant: str = RGB):
-    """Set the Mitsuba variant, register plausible's plugins, return ``mi``."""
+def mitsuba(kind: str = RGB):
+    """Set the Mitsuba variant of ``kind`` (:data:`RGB` or :data:`SPECTRAL`) on the device in
+    force (:func:`plausible.mitsuba.variant.preferred`), register plausible's plugins, return ``mi``."""
     import mitsuba as mi
 
     import plausible.mitsuba as pm
+    from plausible.mitsuba.variant import preferred
 
-    pm.register(variant)
+    pm.register(preferred(kind))
     return mi
 
 

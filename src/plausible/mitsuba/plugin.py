@@ -490,7 +490,8 @@ def _interface_methods(mi, dr, base):
             wi_c = self._split(si.wi)
             wo_c, k = mixture_sample(ops, self.model, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q, enabled,
                                      components=True)
-            wo_c = vec.normalize(ops, tuple(mi.Float(c) for c in wo_c))
+            # by division: the stored wo is the wo its pdf sees (vec.normalize, CUDA's contraction)
+            wo_c = vec.normalize(ops, tuple(mi.Float(c) for c in wo_c), divide=True)
             pdf = self._pdf(ctx, si, wo_c, q, enabled)
             ok = active & (pdf > 0) & (wo_c[2] > 0) & (si.wi.z > 0)
             bs.wo = mi.Vector3f(*wo_c)
