@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
 mi = pytest.importorskip("mitsuba")
 dr = pytest.importorskip("drjit")
 
+from plausible.mitsuba import variant as _variants  # noqa: E402
+
+#: The variant the plugin tests run on: $PLAUSIBLE_TEST_VARIANT (scripts/gpu_check.sh runs the
+#: suite once per CUDA variant), else the machine's preferred RGB variant (cuda_ad_rgb where a GPU
+#: is found, else llvm_ad_rgb), else llvm_ad_rgb.
 VARIANT = None
-for _v in ("llvm_ad_rgb",):
+for _v in dict.fromkeys([v for v in (os.environ.get("PLAUSIBLE_TEST_VARIANT"),) if v]
+                        + [v for v in _variants.available() if v.endswith("_ad_rgb")][:1] + ["llvm_ad_rgb"]):
     try:
         mi.set_variant(_v)
         VARIANT = _v
@@ -17,7 +25,10 @@ for _v in ("llvm_ad_rgb",):
     except (ImportError, AttributeError, RuntimeError):
         continue
 if VARIANT is None:
-    pytest.skip("no Mitsuba LLVM variant can be set", allow_module_level=True)
+    pytest.skip("no Mitsuba JIT variant can be set", allow_module_level=True)
+#: The device of :data:`VARIANT`: tolerances that differ there say why (approximate division and
+#: square root, flushed denormals and contracted products on CUDA).
+ON_CUDA = VARIANT.startswith("cuda")
 
 import plausible  # noqa: E402
 import plausible.mitsuba as pm  # noqa: E402

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mi_helpers import dr, interaction, mi, spectrum_np, upper_dirs, vec3
+from mi_helpers import ON_CUDA, dr, interaction, mi, spectrum_np, upper_dirs, vec3
 
 from plausible.mitsuba import props as P
 
@@ -51,7 +51,9 @@ def test_8bit_texels_are_read_as_mitsuba_evaluates_them(images, ext, raw):
     c = (np.arange(8) + 0.5) / 8
     u, v = np.meshgrid(c, c, indexing="xy")
     want = P.eval_at_uv(mi, tex, np.stack([u.ravel(), v.ravel()], -1))
-    np.testing.assert_allclose(texels, want, rtol=1e-5, atol=1e-7)
+    # CUDA: Mitsuba's own read of an 8-bit sRGB texel is not the exact decode there (0.83203125
+    # = 213/256 against 0.83077 on an H200: the GPU's texture path, measured, not the plugin's)
+    np.testing.assert_allclose(texels, want, rtol=1e-5, atol=2e-3 if ON_CUDA and not raw else 1e-7)
     assert P.bitmap_is_raw(tex, "data") is raw
 
 

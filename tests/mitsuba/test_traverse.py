@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mi_helpers import PLUGIN_MODELS, interaction, mi, spectrum_np, upper_dirs, vec3
+from mi_helpers import ON_CUDA, PLUGIN_MODELS, interaction, mi, spectrum_np, upper_dirs, vec3
 
 import plausible
 
@@ -78,8 +78,10 @@ def test_update_of_each_continuous_parameter_changes_eval(plugin):
         params[prm.name] = mi.Float(v)
         params.update()
         want = model_eval(plausible.make(name, **{prm.name: v}), wi, wo)
+        # CUDA: approximate division leaves 2.8e-17 where the value is 0 (low_smooth, on an H200)
         np.testing.assert_allclose(eval_np(bsdf, wi, wo), want, rtol=2e-4,
-                                   atol=2e-4 * np.max(np.abs(want)), err_msg=prm.name)
+                                   atol=max(2e-4 * np.max(np.abs(want)), 1e-15 if ON_CUDA else 0.0),
+                                   err_msg=prm.name)
         params[prm.name] = mi.Float(prm.default)
         params.update()
         changed += 1
