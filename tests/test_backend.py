@@ -369,12 +369,18 @@ def test_a_device_that_does_not_run_is_refused_with_its_cause(monkeypatch):
 
 
 @needs_drjit
-def test_the_llvm_device_by_name_gives_the_drjit_numbers(rng):
-    """``backend="llvm"`` is the Dr.Jit path on the CPU: the NumPy values to 1e-12 (the same
-    formulas, another array type), and the kernel runs on LLVM arrays."""
-    m = plausible.make("ashikhmin-shirley", nu=30.0, nv=300.0)
+@pytest.mark.parametrize("dev", backend.devices())
+def test_each_device_of_this_machine_gives_the_numpy_numbers(dev, rng):
+    """``backend="llvm"`` / ``"cuda"``, each device this machine has: the NumPy values of eval,
+    pdf and a colour model to 1e-12, and the albedo to its error (the same formulas, another
+    array type); the kernels run on that device's arrays."""
+    m = plausible.make("ashikhmin-shirley", nu=30.0, nv=300.0, rs=[0.05, 0.2, 0.5])
     wi, wo = random_upper(rng, 64, 0.05), random_upper(rng, 64, 0.05)
-    ref = m.eval(wi, wo, backend="numpy")
-    assert np.allclose(m.eval(wi, wo, backend="llvm"), ref, rtol=1e-12, atol=0)
-    with backend.use("llvm"):
-        assert backend.jit_module().__name__ == "drjit.llvm"
+    for fn in (m.eval, m.pdf):
+        assert np.allclose(fn(wi, wo, backend=dev), fn(wi, wo, backend="numpy"), rtol=1e-12, atol=0)
+    with backend.use(dev):
+        assert backend.jit_module().__name__ == f"drjit.{dev}"
+        a = plausible.albedo(m, [0.6, 0.0, 0.8])
+    with backend.use("numpy"):
+        b = plausible.albedo(m, [0.6, 0.0, 0.8])
+    assert np.all(np.abs(np.asarray(a.value) - b.value) <= 2 * np.maximum(a.error, 1e-9))

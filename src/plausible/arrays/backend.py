@@ -117,7 +117,7 @@ def requested(backend: str | None = None) -> str:
 
 @contextlib.contextmanager
 def use(backend: str):
-    """Run the enclosed code with ``backend`` (``"auto"``, ``"numpy"`` or ``"drjit"``)
+    """Run the enclosed code with ``backend`` (``"auto"``, ``"numpy"``, ``"drjit"``, ``"llvm"`` or ``"cuda"``)
     as the request of every ``eval``/``pdf``/``sample`` call, including those
     the analysis makes:
 
