@@ -121,13 +121,11 @@ def drjit_ops(float_type=None) -> SimpleNamespace:
         return tuple(dr.if_stmt(tuple(c), ~keep, lambda *a: tuple(fn(*a)), lambda *a: a))
 
     def table(values):
-        # a 1-D table of constants for :func:`gather` (float_type, else Float64 of the device in force)
-        if float_type is not None:
-            t = float_type
-        else:
-            from .backend import jit_module
-
-            t = jit_module().Float64
+        # a 1-D table of constants for :func:`gather`, of the namespace's float_type (the device's
+        # Float64 of plausible.arrays.backend, or a Mitsuba variant's mi.Float)
+        if float_type is None:
+            raise ValueError("drjit_ops(float_type): a table needs the array type (e.g. mi.Float)")
+        t = float_type
         return t(np.ascontiguousarray(values, dtype=np.float64).ravel())
 
     def gather(tab, index):

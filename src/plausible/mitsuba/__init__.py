@@ -54,7 +54,8 @@ def register(variant: str | None = None) -> list:
     """Register a Mitsuba BSDF plugin for every registered plausible model.
 
     Plugins are registered for the current Mitsuba variant (``variant`` sets it
-    first; with none set, ``llvm_ad_rgb`` is tried, then ``scalar_rgb``).  Call
+    first; with none set, :func:`plausible.mitsuba.variant.preferred` is tried, ``cuda_ad_rgb``
+    where an NVIDIA GPU is found, else ``llvm_ad_rgb``, then ``scalar_rgb``).  Call
     again after switching variants.  Returns the plugin names (those of
     :func:`plugin_names`, then ``merl``, ``plausible_material`` and ``plausible_compensated``).
     """
