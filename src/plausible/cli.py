@@ -904,7 +904,6 @@ class _BatchBar:
 @click.option("--host", default="127.0.0.1", show_default=True,
               help="Address to bind (localhost by default; another address exposes the explorer to the network).")
 @click.option("--no-browser", is_flag=True, help="Do not open the page in a browser.")
-@VARIANT_OPT
 def explore(port, host, no_browser):
     """Interactive BRDF explorer in the browser (lit sphere, lobes, albedo, verdict, exports)."""
     from .explorer import bind, serve
