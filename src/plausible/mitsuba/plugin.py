@@ -247,11 +247,13 @@ class ParamState:
         self.exact = {n: (values[n], np.array(a)) for n, a in self.arrays.items()}
         self.q_opaque = ()
         self.build()
-        # sampling constants that may change (traversed) and that the sampler takes as arrays
-        self.q_opaque = [k for k, f in self.flags.items()
-                         if f == mi.ParamFlags.Differentiable and array_safe(mi, self.model, k)]
-        self._set_sampling()
         self.varying = [k for k, t in self.textures.items() if P.texture_varies(t)]
+        # sampling constants that may change (traversed arrays, constant textures such as
+        # <rgb>) and that the sampler takes as arrays: opaque, so a new value is kernel data
+        changing = [k for k, f in self.flags.items() if f == mi.ParamFlags.Differentiable]
+        changing += [k for k in self.textures if k not in self.varying and k in self.q_const]
+        self.q_opaque = [k for k in changing if array_safe(mi, self.model, k)]
+        self._set_sampling()
         self.q_varying = [k for k in self.varying if array_safe(mi, self.model, k)]
         for k in set(self.varying) - set(self.q_varying):
             self._log(f"{plugin}: sampling uses the mean of texture {k!r} (the model's "
