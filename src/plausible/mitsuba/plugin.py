@@ -433,11 +433,22 @@ def _lobe_methods(mi, dr):
             return [any(ctx.is_enabled(t, k) for t in kinds) for k, kinds in enumerate(self.state.lobe_types)]
 
         @staticmethod
+        def _unpolarized(v):
+            """A value of the model (a Float, or a tuple of channels) as Mitsuba's
+            ``UnpolarizedSpectrum``.  In the monochrome variants (``llvm_ad_mono``,
+            ``*_mono_polarized``) three channels (an RGB colour held as numbers or a
+            ``Color3f``: a published fit, a MERL table) become their luminance, ``mi.luminance``
+            (Rec. 709 weights), as Mitsuba's own ``srgb`` texture evaluates there."""
+            if mi.is_monochromatic and (isinstance(v, mi.Color3f) or isinstance(v, tuple) and len(v) == 3):
+                v = mi.luminance(v if isinstance(v, mi.Color3f) else mi.Color3f(*v))
+            return mi.UnpolarizedSpectrum(*v) if isinstance(v, tuple) else mi.UnpolarizedSpectrum(v)
+
+        @staticmethod
         def _spectrum(v):
             """A value of the model as Mitsuba's ``Spectrum``; in the polarized
             variants a depolarizer (only ``M00``), as Mitsuba's ``diffuse`` and
             ``roughplastic`` return: the models have no polarization."""
-            s = mi.UnpolarizedSpectrum(*v) if isinstance(v, tuple) else mi.UnpolarizedSpectrum(v)
+            s = v if isinstance(v, mi.UnpolarizedSpectrum) else PlausibleLobes._unpolarized(v)
             return mi.depolarizer(s) if mi.is_polarized else s
 
         def _value(self, ctx, si, wo_c, enabled):
@@ -448,8 +459,7 @@ def _lobe_methods(mi, dr):
             wi_c = self._split(si.wi)
             light, view = (wi_c, wo_c) if ctx.mode == mi.TransportMode.Importance else (wo_c, wi_c)
             f = mixture_f(ops, self.model, light, view, self.state.p(si), enabled, components=True)
-            f = mi.UnpolarizedSpectrum(*f) if isinstance(f, tuple) else mi.UnpolarizedSpectrum(f)
-            return f * dr.maximum(wo_c[2], 0.0)
+            return self._unpolarized(f) * dr.maximum(wo_c[2], 0.0)
 
     return PlausibleLobes
 
@@ -522,7 +532,7 @@ def _interface_methods(mi, dr, base):
             p = self.state.p(si)
             wi_c = self._split(si.wi)
             total = add_values([a(ops, wi_c, p) for a in albedos])
-            value = mi.UnpolarizedSpectrum(*total) if isinstance(total, tuple) else mi.UnpolarizedSpectrum(total)
+            value = self._unpolarized(total)
             return self._spectrum(dr.select(active & (si.wi.z > 0), value, 0.0))
 
     return PlausibleInterface

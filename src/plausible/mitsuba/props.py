@@ -433,9 +433,18 @@ def uv_grid(mi, textures) -> np.ndarray:
 
 
 def eval_at_uv(mi, tex, uv: np.ndarray) -> np.ndarray:
-    """``tex.eval`` at the UV points ``uv`` ``(m, 2)``: array ``(m, channels)``."""
+    """``tex.eval`` at the UV points ``uv`` ``(m, 2)``: array ``(m, channels)``: one
+    vectorised interaction, or in a scalar variant (``scalar_rgb``, whose interaction
+    holds one point) one call per point (about 1 us each)."""
     import drjit as dr
 
+    if not dr.is_array_v(mi.Float):
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        out = []
+        for u, v in np.asarray(uv, dtype=np.float64):
+            si.uv = mi.Point2f(float(u), float(v))
+            out.append(np.atleast_1d(np.array(tex.eval(si), dtype=np.float64)))
+        return np.array(out).reshape(len(uv), -1)
     si = dr.zeros(mi.SurfaceInteraction3f, len(uv))
     si.uv = mi.Point2f(np.ascontiguousarray(uv.T, dtype=np.float32))
     return np.array(tex.eval(si), dtype=np.float64).T
