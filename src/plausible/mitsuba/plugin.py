@@ -302,7 +302,7 @@ class ParamState:
         with progress.reporting(progress.ambient() or mitsuba_progress(self.mi, self.plugin)):
             model = self._make_without_means(consts, no_mean)
         known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
-        if known:
+        if known and P.has_constraints(self.info):
             base = {k: v for k, v in consts.items() if k not in known}
             pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
             P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)

@@ -466,6 +466,14 @@ def values_at_uv(mi, info, textures: dict, uv) -> PointValues:
     return PointValues(uv, vals)
 
 
+def has_constraints(info) -> bool:
+    """Does the model have constraints between parameters (a ``_validate`` of its own),
+    which :func:`check_pointwise` checks?"""
+    from ..bxdf import BxDF
+
+    return info.cls._validate is not BxDF._validate
+
+
 def check_pointwise(plugin: str, info, constants: dict, points: PointValues, warn=None) -> int:
     """Cross-parameter constraints at every point: build the model (the NumPy
     one, whose constructor checks them) for each distinct combination of the
@@ -477,9 +485,7 @@ def check_pointwise(plugin: str, info, constants: dict, points: PointValues, war
     naming the plugin, the UV point and the values there.  Returns the number of
     combinations checked.
     """
-    from ..bxdf import BxDF
-
-    if info.cls._validate is BxDF._validate:
+    if not has_constraints(info):
         return 0
     names = list(points.values)
     cols = [np.asarray(points.values[n]).reshape(len(points.uv), -1) for n in names]
@@ -517,4 +523,5 @@ __all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", 
            "read_number", "read_texture", "metal_textures", "texture_texels",
            "texture_range_known", "texture_mean", "texture_varies", "srgb_to_linear",
            "bitmap_values", "bitmap_is_raw", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",
+           "has_constraints",
            "PointValues"]
