@@ -195,9 +195,10 @@ class ParamState:
     from the current values (textures at their clamped mean).
     """
 
-    def __init__(self, mi, plugin, info, props, alias, log=None, make=None, ignore=()):
+    def __init__(self, mi, plugin, info, props, alias, log=None, make=None, ignore=(), warn=None):
         self.mi, self.plugin, self.info = mi, plugin, info
         self.log = log
+        self.warn = warn if warn is not None else (lambda text: mi.Log(mi.LogLevel.Warn, text))
         self.make = make if make is not None else info.cls
         keys = [k for k in props.keys() if k not in ignore]
         material = props["material"] if "material" in props else None
@@ -235,6 +236,7 @@ class ParamState:
             values.pop(name, None)
         self.derived = {k for k, v in values.items()
                         if v is None and k in info.cls.DERIVED and k not in self.given}
+        self.warned, self.warnings = set(), []
         self.known = {k: self._check_texture(k) for k in self.textures}
         self.arrays, self.flags, self.fixed = {}, {}, {}
         for name, v in values.items():
@@ -264,11 +266,20 @@ class ParamState:
             self.log(text)
 
     def _check_texture(self, name) -> bool:
-        known = P.check_texture(self.mi, self.plugin, self.info.param(name), self.textures[name])
-        if not known:
+        """Is the texture of ``name`` known to lie in the range (else it is clamped per
+        shading point)?  A texture with texels outside is warned about once per plugin
+        (:func:`props.range_warning`; ``warnings`` keeps the texts)."""
+        prm, tex = self.info.param(name), self.textures[name]
+        found = P.check_texture(self.mi, self.plugin, prm, tex)
+        text = P.range_warning(self.plugin, prm, tex, found, self.given.get(name))
+        if text is not None and id(tex) not in self.warned:  # one texture, one warning (Ward's alpha)
+            self.warned.add(id(tex))
+            self.warnings.append(text)
+            self.warn(text)
+        elif not found.total:
             self._log(f"{self.plugin}: the range of texture {name!r} cannot be read; "
-                      f"it is clamped to {self.info.param(name).range_text()} per shading point")
-        return known
+                      f"it is clamped to {prm.range_text()} per shading point")
+        return found.known
 
     def values(self) -> dict:
         """The current Python value of every non-texture parameter: the value last
@@ -365,7 +376,7 @@ class ParamState:
                 # a texture cannot be given back its old data: it is clamped from now on
                 self.known[k] = False
                 raise ValueError(f"{err} (params.update() refused; the texture is clamped to "
-                                 f"the range per shading point until it is valid)") from None
+                                 f"the range per shading point)") from None
         try:
             self.build()
         except ValueError as err:
