@@ -167,3 +167,18 @@ def test_ward_alpha_is_isotropic_roughness():
     assert not b.flags() & mi.BSDFFlags.Anisotropic
     with pytest.raises(LOAD_ERRORS, match="'alpha_x' given twice"):
         mi.load_dict({"type": "ward", "alpha": 0.3, "alpha_x": 0.2})
+
+
+@pytest.mark.parametrize("plugin,name,choices", [
+    ("neumann_metal", "fresnel", "{none, schlick, conductor}"),
+    ("pumped_up", "correction", "{max, controlled, controlled-product}"),
+])
+def test_a_texture_on_a_choice_parameter_is_refused_in_one_line(plugin, name, choices):
+    """A texture where a choice is expected: the message's last line (what Mitsuba shows)
+    names the plugin, the parameter, the texture's class and ends with the allowed
+    choices, not with the texture printed over many lines (issue 43: it ended in ']')."""
+    with pytest.raises(LOAD_ERRORS) as err:
+        mi.load_dict({"type": plugin, name: checker(0.2, 0.4)})
+    last = str(err.value).strip().splitlines()[-1]
+    assert f"{plugin}: parameter '{name}' takes no texture (got Checkerboard)" in last
+    assert last.endswith(f"it must be {choices}")

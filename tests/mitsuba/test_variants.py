@@ -116,3 +116,64 @@ def test_a_merl_table_is_its_luminance_in_a_mono_variant(variant, tmp_path):
     got_wo = np.array(bs.wo, dtype=np.float64).ravel()
     f = float(model.eval(got_wo, wi) @ LUMINANCE)
     np.testing.assert_allclose(np.array(w, dtype=np.float64).ravel()[0], f * np.pi, rtol=1e-4)
+
+
+# -- switching variants --------------------------------------------------------------
+
+class InfoLog(mi.Appender):
+    def __init__(self):
+        super().__init__()
+        self.lines = []
+
+    def append(self, level, text):
+        self.lines.append(text)
+
+    def log_progress(self, *args):
+        pass
+
+
+def test_register_with_a_variant_says_that_it_changed_the_global_one():
+    """register('llvm_ad_mono') leaves llvm_ad_mono set (documented) and says so in Mitsuba's
+    log, naming the variant it replaced and how to go back; the RGB plugins stay registered."""
+    if "llvm_ad_mono" not in mi.variants():
+        pytest.skip("llvm_ad_mono not in this Mitsuba build")
+    log = InfoLog()
+    logger = mi.logger()
+    level = logger.log_level()
+    logger.set_log_level(mi.LogLevel.Info)
+    logger.add_appender(log)
+    try:
+        pm.register("llvm_ad_mono")
+        assert mi.variant() == "llvm_ad_mono"
+        said = [t for t in log.lines if "plausible.mitsuba.register" in t]
+        assert len(said) == 1 and "'llvm_ad_mono' (was 'llvm_ad_rgb'" in said[0] and "mi.set_variant('llvm_ad_rgb')" in said[0]
+    finally:
+        logger.remove_appender(log)
+        logger.set_log_level(level)
+        mi.set_variant(VARIANT)
+    assert mi.load_dict({"type": "lambertian"}) is not None
+
+
+def test_a_plugin_missing_after_switching_variant_gets_the_register_hint():
+    """After mi.set_variant to a variant never registered, plausible.mitsuba.load_dict (and
+    the inverse-rendering scene built with it) ends its error with the hint to call
+    register() again; an unknown non-plausible plugin keeps Mitsuba's own error."""
+    fresh = next((v for v in ("llvm_ad_spectral_polarized", "llvm_ad_mono_polarized", "scalar_spectral_polarized")
+                  if v in mi.variants() and v not in pm._REGISTERED), None)
+    if fresh is None:
+        pytest.skip("no variant left without the plugins")
+    mi.set_variant(fresh)
+    try:
+        with pytest.raises(RuntimeError, match=rf"(?s)not found.*'lambertian' is not registered in the variant "
+                                               rf"'{fresh}'.*call plausible.mitsuba.register\(\) again"):
+            pm.load_dict({"type": "lambertian"})
+        if fresh.startswith("llvm_ad"):  # sphere_scene's prb needs an AD variant
+            from plausible.mitsuba.inverse import sphere_scene
+
+            with pytest.raises(RuntimeError, match=r"call plausible.mitsuba.register\(\) again"):
+                sphere_scene({"type": "ward"})
+        with pytest.raises(RuntimeError) as err:
+            pm.load_dict({"type": "no_such_bsdf"})
+        assert "register()" not in str(err.value)
+    finally:
+        mi.set_variant(VARIANT)

@@ -533,18 +533,19 @@ def _interface_methods(mi, dr, base):
             :attr:`plausible.bxdf.Lobe.albedo`: ``rd``, ``kd``; Ashikhmin-Shirley's
             coupled term ``rd (1 - rs) (1 - (1 - cos/2)^5)``), as ``diffuse`` and
             ``roughplastic`` return their reflectance (the ``aov`` integrator's
-            ``albedo``).  A model without a diffuse lobe: Mitsuba's default,
-            ``pi eval(wo = n)``, as ``roughconductor``."""
+            ``albedo``).  On a back face (``si.wi.z < 0``) the albedo of ``si.wi``
+            mirrored to the front, as ``diffuse`` returns its reflectance on either
+            side.  A model without a diffuse lobe: Mitsuba's default,
+            ``pi eval(wo = n)``, as ``roughconductor`` (0 on a back face)."""
             ops = drjit_ops(mi.Float)
             albedos = [lb.albedo for lb in self.model.components() if lb.albedo is not None]
             if not albedos:
                 n = mi.Vector3f(0.0, 0.0, 1.0)
                 return self.eval(mi.BSDFContext(), si, n, active) * dr.pi
             p = self.state.p(si)
-            wi_c = self._split(si.wi)
+            wi_c = (si.wi.x, si.wi.y, dr.abs(si.wi.z))
             total = add_values([a(ops, wi_c, p) for a in albedos])
-            value = self._unpolarized(total)
-            return self._spectrum(dr.select(active & (si.wi.z > 0), value, 0.0))
+            return self._spectrum(dr.select(active, self._unpolarized(total), 0.0))
 
     return PlausibleInterface
 

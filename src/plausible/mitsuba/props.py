@@ -223,6 +223,11 @@ def read_param(mi, prm, props, key, plugin):
     (a string or a sequence is the parameter's own to read:
     :meth:`Param.from_mitsuba <plausible.params.Param.from_mitsuba>`)."""
     raw = props[key]
+    if not prm.numeric and isinstance(raw, mi.Object):
+        # one line, the allowed values last (Mitsuba shows the message's last line)
+        given = f" (given as {key!r})" if key != prm.name else ""
+        raise ValueError(f"{plugin}: parameter {prm.name!r}{given} takes no texture (got "
+                         f"{texture_label(raw)}); it must be {prm.range_text()}")
     if not prm.numeric or isinstance(raw, str):
         return prm.from_mitsuba(raw, plugin)
     if isinstance(raw, (int, float)) and not isinstance(raw, bool):
