@@ -48,7 +48,7 @@ def lobe_kinds(lobe) -> frozenset:
     return frozenset({lobe.kind}) if isinstance(lobe.kind, str) else frozenset(lobe.kind)
 
 
-def bsdf_flags(mi, model, info, varying: bool):
+def bsdf_flags(mi, model, info, varying: bool, isotropic: bool | None = None):
     """``(flags, components, sampled)`` of a model, as pbrt's ``BxDF::Flags()``
     and Mitsuba's ``m_components``: one component per lobe of
     :meth:`plausible.bxdf.BxDF.components`, in order.
@@ -60,6 +60,7 @@ def bsdf_flags(mi, model, info, varying: bool):
     textures; ``NonSymmetric`` for non-reciprocal models.  ``flags`` is their
     union; ``sampled[k]`` the type a sample of component ``k`` reports:
     ``GlossyReflection``, or ``DiffuseReflection`` for a purely diffuse lobe.
+    ``isotropic``: the probe's answer where the caller has it already.
     """
     F = mi.BSDFFlags
     common = F.FrontSide
@@ -67,7 +68,7 @@ def bsdf_flags(mi, model, info, varying: bool):
         common |= F.SpatiallyVarying
     if not info.reciprocal:
         common |= F.NonSymmetric
-    aniso = not is_isotropic(model)
+    aniso = not (is_isotropic(model) if isotropic is None else isotropic)
     components, sampled = [], []
     for lobe in model.components():
         kinds = lobe_kinds(lobe)
@@ -237,6 +238,9 @@ class ParamState:
         self.derived = {k for k, v in values.items()
                         if v is None and k in info.cls.DERIVED and k not in self.given}
         self.warned, self.warnings = set(), []
+        # what params.update() changed (None: everything, as at load); textures' means; the
+        # last pointwise check's inputs
+        self.dirty, self.means, self.pointwise_key = None, {}, None
         self.known = {k: self._check_texture(k) for k in self.textures}
         self.arrays, self.flags, self.fixed = {}, {}, {}
         for name, v in values.items():
@@ -290,7 +294,9 @@ class ParamState:
         for name, a in self.arrays.items():
             prm = self.info.param(name)
             value, image = self.exact.get(name, (None, None))
-            if image is not None and np.array_equal(np.asarray(a), image):
+            if image is not None and self.dirty is not None and name not in self.dirty:
+                out[name] = value  # not among the parameters params.update() changed: not read back
+            elif image is not None and np.array_equal(np.asarray(a), image):
                 out[name] = value
             else:
                 out[name] = prm.validate(untraverse(prm, a, self.templates[name]), self.plugin)
@@ -305,7 +311,9 @@ class ParamState:
         no_mean = []
         for name, tex in self.textures.items():
             prm = self.info.param(name)
-            mean = P.texture_mean(tex)
+            if self.dirty is None or name in self.dirty or name not in self.means:
+                self.means[name] = P.texture_mean(tex)
+            mean = self.means[name]
             if mean is None:
                 no_mean.append(name)
                 continue
@@ -315,15 +323,32 @@ class ParamState:
         known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
         if known and P.has_constraints(self.info):
             base = {k: v for k, v in consts.items() if k not in known}
-            pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
-            P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
+            # again only where a textured value or another parameter changed (1.4 s for a 256^2 map)
+            key = (sorted(known), repr(sorted(base.items())))
+            if self.dirty is None or set(known) & self.dirty or key != self.pointwise_key:
+                pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
+                P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
+            self.pointwise_key = key
         self.model = model
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
         self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
         self._set_sampling()
         self.m_flags, self.components, self.sampled_types = bsdf_flags(
-            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()))
+            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()),
+            self._isotropic(model, consts))
         self.lobe_types = lobe_types(self.mi, model)
+
+    def _isotropic(self, model, consts) -> bool:
+        """:func:`~plausible.analysis.is_isotropic` of ``model`` (the probe: two NumPy
+        evaluations of 96 pairs, 2-3 ms, most of a ``params.update()``), probed again only
+        when what can change it changed: a scalar parameter, or whether a colour is zero (a
+        colour scales a lobe: at zero an anisotropic lobe vanishes).  A new colour of an
+        optimisation step reuses the answer."""
+        key = tuple(sorted((k, bool(np.all(np.asarray(v) == 0)) if self.info.param(k).is_color else repr(v))
+                           for k, v in consts.items()))
+        if getattr(self, "_iso", (None,))[0] != key:
+            self._iso = (key, is_isotropic(model))
+        return self._iso[1]
 
     def describe(self) -> str:
         """The parameters as the scene gave them: numbers as values, a texture as
@@ -367,9 +392,11 @@ class ParamState:
             self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
 
     def changed(self, keys):
-        """After ``params.update()``: rebuild, or restore the previous values and
-        raise if the new ones are refused."""
-        for k in self.textures:
+        """After ``params.update()`` of the parameters ``keys`` (Mitsuba passes the names
+        that changed; none: all): check the textures among them, rebuild, or restore the
+        previous values and raise if the new ones are refused."""
+        self.dirty = set(keys) if keys else None
+        for k in [k for k in self.textures if k in keys or not keys]:  # the textures that changed
             try:
                 self.known[k] = self._check_texture(k)
             except ValueError as err:
