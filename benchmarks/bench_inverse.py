@@ -8,11 +8,15 @@ Scene: a sphere on a diffuse floor under a constant environment and a point ligh
 and (0.5, 0.4, 0.3) and is fitted by ``mi.ad.Adam`` (lr 0.02) to the image of
 itself at other colours.  Per iteration (after two warm-up iterations):
 
-* ``iter``: wall time of render + backward + step + ``params.update(opt)``, the
-  median over the iterations; the loop reads the loss each iteration, as an
-  optimisation that prints it does, so nothing is left pending across iterations;
+* ``iter wall`` / ``iter CPU``: wall and process CPU time of render + backward +
+  step + ``params.update(opt)``, the median over the iterations; the BSDFs'
+  iterations alternate (the machine is shared); the loop reads the loss each
+  iteration, as an optimisation that prints it does, so nothing is left pending;
 * ``new kernels``: JIT kernels whose hash Dr.Jit's kernel history had not shown
-  before (a compilation, or a load from the on-disk cache of an earlier run);
+  before (a compilation, or a load from the on-disk cache of an earlier run),
+  summed over the measured iterations; ``kernels/iter`` the JIT kernels launched
+  per iteration and ``kernel exec`` their execution time as Dr.Jit's kernel
+  history reports it (the rest of the CPU time is tracing, Python, Adam);
 * ``update``: ``params[key] = value; params.update()`` alone, on an idle device
   (``dr.sync_thread()`` first), the median of 20; and the same when the previous
   render is still running (Dr.Jit's LLVM backend launches kernels asynchronously;
@@ -62,34 +66,45 @@ def scene(plugin, colours, res, spp):
     })
 
 
-def optimise(plugin, res, spp, iters):
-    keys = [f"sphere.bsdf.{n}.value" for n in CASES[plugin] if n is not None]
-    ref = mi.render(scene(plugin, TARGET, res, spp), spp=4 * spp, seed=999)
-    sc = scene(plugin, START, res, spp)
-    params = mi.traverse(sc)
-    opt = mi.ad.Adam(lr=0.02)
-    for k in keys:
-        opt[k] = params[k]
-    params.update(opt)
-    seen, times, new = set(), [], []
-    for it in range(iters + 2):
-        dr.kernel_history()
-        t0 = time.perf_counter()
-        img = mi.render(sc, params, spp=spp, seed=it)
-        loss = dr.mean(dr.square(img - ref), axis=None)
-        dr.backward(loss)
-        opt.step()
-        for k in keys:
-            opt[k] = dr.clip(opt[k], 0.0, 0.95)
-        params.update(opt)
-        float(dr.ravel(loss)[0])
-        dt = time.perf_counter() - t0
-        hashes = {k["hash"] for k in dr.kernel_history() if k["type"] == dr.KernelType.JIT}
-        if it >= 2:
-            times.append(dt)
-            new.append(len(hashes - seen))
-        seen |= hashes
-    return statistics.median(times), new, float(dr.ravel(loss)[0])
+class Optimisation:
+    """One BSDF's optimisation, run a few iterations at a time (``run``), so that the
+    BSDFs' iterations can alternate on a shared machine."""
+
+    def __init__(self, plugin, res, spp):
+        self.keys = [f"sphere.bsdf.{n}.value" for n in CASES[plugin] if n is not None]
+        self.ref = mi.render(scene(plugin, TARGET, res, spp), spp=4 * spp, seed=999)
+        self.scene, self.spp = scene(plugin, START, res, spp), spp
+        self.params = mi.traverse(self.scene)
+        self.opt = mi.ad.Adam(lr=0.02)
+        for k in self.keys:
+            self.opt[k] = self.params[k]
+        self.params.update(self.opt)
+        self.seen, self.it, self.loss = set(), 0, float("nan")
+        self.wall, self.cpu, self.new, self.launches, self.exec_ms = [], [], [], [], []
+
+    def run(self, iters, record=True):
+        for _ in range(iters):
+            dr.kernel_history()
+            t0, c0 = time.perf_counter(), time.process_time()
+            img = mi.render(self.scene, self.params, spp=self.spp, seed=self.it)
+            loss = dr.mean(dr.square(img - self.ref), axis=None)
+            dr.backward(loss)
+            self.opt.step()
+            for k in self.keys:
+                self.opt[k] = dr.clip(self.opt[k], 0.0, 0.95)
+            self.params.update(self.opt)
+            self.loss = float(dr.ravel(loss)[0])
+            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+            jit = [k for k in dr.kernel_history() if k["type"] == dr.KernelType.JIT]
+            hashes = {k["hash"] for k in jit}
+            if record:
+                self.wall.append(wall)
+                self.cpu.append(cpu)
+                self.new.append(len(hashes - self.seen))
+                self.launches.append(len(jit))
+                self.exec_ms.append(sum(k.get("execution_time", 0.0) for k in jit))
+            self.seen |= hashes
+            self.it += 1
 
 
 def update_cost(plugin, res, spp, n=20):
@@ -127,13 +142,22 @@ def main():
 
     pm.register()
     dr.set_flag(dr.JitFlag.KernelHistory, True)
-    print(f"{args.variant}, {res[0]}x{res[1]}, {args.spp} spp, prb, {args.iters} iterations after 2 warm-up")
-    print(f"{'bsdf':20s} {'iter (ms)':>10s} {'new kernels per iter':>22s} {'final loss':>11s} "
+    runs = {plugin: Optimisation(plugin, res, args.spp) for plugin in CASES}
+    for r in runs.values():
+        r.run(2, record=False)          # warm-up: tracing and compilation of the first values
+    for _ in range(args.iters):         # the BSDFs alternate, one iteration each
+        for r in runs.values():
+            r.run(1)
+    print(f"{args.variant}, {res[0]}x{res[1]}, {args.spp} spp, prb, {args.iters} iterations each "
+          f"after 2 warm-up, alternating")
+    print(f"{'bsdf':20s} {'iter wall (ms)':>15s} {'iter CPU (ms)':>14s} {'kernels/iter':>13s} "
+          f"{'kernel exec (ms)':>17s} {'new kernels':>12s} {'final loss':>11s} "
           f"{'update idle (ms)':>17s} {'update after render (ms)':>25s}")
-    for plugin in CASES:
-        t, new, loss = optimise(plugin, res, args.spp, args.iters)
+    for plugin, r in runs.items():
         idle, busy = update_cost(plugin, res, args.spp)
-        print(f"{plugin:20s} {1e3 * t:10.1f} {str(new):>22s} {loss:11.3g} {1e3 * idle:17.2f} {1e3 * busy:25.1f}")
+        print(f"{plugin:20s} {1e3 * statistics.median(r.wall):15.1f} {1e3 * statistics.median(r.cpu):14.1f} "
+              f"{statistics.median(r.launches):13.0f} {statistics.median(r.exec_ms):17.1f} "
+              f"{sum(r.new):12d} {r.loss:11.3g} {1e3 * idle:17.2f} {1e3 * busy:25.1f}")
 
 
 if __name__ == "__main__":

@@ -8,36 +8,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mi_helpers import VARIANT, dr, mi
+from mi_helpers import LogCapture, dr, mi, variant  # noqa: F401 (a fixture)
 
 import plausible
-import plausible.mitsuba as pm
 
 pytestmark = pytest.mark.drjit
 
 LOAD_ERRORS = (RuntimeError, ValueError)
 
 
-class Capture(mi.Appender):
-    """Mitsuba's log lines at level Warn."""
-
-    def __init__(self):
-        super().__init__()
-        self.warnings = []
-
-    def append(self, level, text):
-        if level == mi.LogLevel.Warn:
-            self.warnings.append(text)
-
-    def log_progress(self, *args):
-        pass
-
-
 def load_logged(desc):
-    cap = Capture()
+    cap = LogCapture()
     mi.logger().add_appender(cap)
     try:
-        return mi.load_dict(desc), [w for w in cap.warnings if "plausible" in w or "must lie in" in w]
+        bsdf = mi.load_dict(desc)
+        return bsdf, [t for level, t in cap.lines if level == mi.LogLevel.Warn and "must lie in" in t]
     finally:
         mi.logger().remove_appender(cap)
 
@@ -46,17 +31,6 @@ def write_exr(path, values):
     arr = np.asarray(values, dtype=np.float32)
     mi.Bitmap(arr, mi.Bitmap.PixelFormat.Y if arr.shape[2] == 1 else mi.Bitmap.PixelFormat.RGB).write(str(path))
     return {"type": "bitmap", "filename": str(path), "filter_type": "nearest"}
-
-
-@pytest.fixture
-def variant(request):
-    if request.param not in mi.variants():
-        pytest.skip(f"{request.param} not in this Mitsuba build")
-    pm.register(request.param)
-    try:
-        yield request.param
-    finally:
-        mi.set_variant(VARIANT)
 
 
 def at_texel(bsdf, uv, wi, wo):

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mi_helpers import VARIANT, dr, mi, upper_dirs
+from mi_helpers import VARIANT, LogCapture, dr, mi, upper_dirs, variant  # noqa: F401 (a fixture)
 
 import plausible
 import plausible.mitsuba as pm
@@ -18,19 +18,6 @@ pytestmark = pytest.mark.drjit
 #: Rec. 709 / sRGB luminance weights of linear R, G, B (ITU-R BT.709, the Y row of
 #: the sRGB-to-XYZ matrix), what a monochrome variant makes of a colour.
 LUMINANCE = np.array([0.212671, 0.715160, 0.072169])
-
-
-@pytest.fixture
-def variant(request):
-    """Register the plugins in ``request.param`` (skipped where the build lacks it); set
-    the test suite's variant back afterwards."""
-    if request.param not in mi.variants():
-        pytest.skip(f"{request.param} not in this Mitsuba build")
-    pm.register(request.param)
-    try:
-        yield request.param
-    finally:
-        mi.set_variant(VARIANT)
 
 
 def one_point(wi, uv=(0.5, 0.5)):
@@ -120,24 +107,12 @@ def test_a_merl_table_is_its_luminance_in_a_mono_variant(variant, tmp_path):
 
 # -- switching variants --------------------------------------------------------------
 
-class InfoLog(mi.Appender):
-    def __init__(self):
-        super().__init__()
-        self.lines = []
-
-    def append(self, level, text):
-        self.lines.append(text)
-
-    def log_progress(self, *args):
-        pass
-
-
 def test_register_with_a_variant_says_that_it_changed_the_global_one():
     """register('llvm_ad_mono') leaves llvm_ad_mono set (documented) and says so in Mitsuba's
     log, naming the variant it replaced and how to go back; the RGB plugins stay registered."""
     if "llvm_ad_mono" not in mi.variants():
         pytest.skip("llvm_ad_mono not in this Mitsuba build")
-    log = InfoLog()
+    log = LogCapture()
     logger = mi.logger()
     level = logger.log_level()
     logger.set_log_level(mi.LogLevel.Info)
@@ -145,7 +120,7 @@ def test_register_with_a_variant_says_that_it_changed_the_global_one():
     try:
         pm.register("llvm_ad_mono")
         assert mi.variant() == "llvm_ad_mono"
-        said = [t for t in log.lines if "plausible.mitsuba.register" in t]
+        said = [t for _, t in log.lines if "plausible.mitsuba.register" in t]
         assert len(said) == 1 and "'llvm_ad_mono' (was 'llvm_ad_rgb'" in said[0] and "mi.set_variant('llvm_ad_rgb')" in said[0]
     finally:
         logger.remove_appender(log)
