@@ -240,7 +240,7 @@ class ParamState:
         self.warned, self.warnings = set(), []
         # what params.update() changed (None: everything, as at load); textures' means; the
         # last pointwise check's inputs
-        self.dirty, self.means, self.pointwise_key = None, {}, None
+        self.dirty, self.means, self.pointwise_key, self._iso = None, {}, None, (None, None)
         self.known = {k: self._check_texture(k) for k in self.textures}
         self.arrays, self.flags, self.fixed = {}, {}, {}
         for name, v in values.items():
@@ -346,7 +346,7 @@ class ParamState:
         optimisation step reuses the answer."""
         key = tuple(sorted((k, bool(np.all(np.asarray(v) == 0)) if self.info.param(k).is_color else repr(v))
                            for k, v in consts.items()))
-        if getattr(self, "_iso", (None,))[0] != key:
+        if self._iso[0] != key:
             self._iso = (key, is_isotropic(model))
         return self._iso[1]
 
