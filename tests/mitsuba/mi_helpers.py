@@ -113,3 +113,30 @@ def interaction(wi):
 def spectrum_np(v):
     """Mitsuba Color3f / Spectrum of width n -> float64 array (n, channels)."""
     return np.array(v, dtype=np.float64).T
+
+
+@pytest.fixture
+def variant(request):
+    """Register the plugins in the variant ``request.param`` (indirect parametrisation;
+    skipped where the build lacks it); set the suite's variant back afterwards."""
+    if request.param not in mi.variants():
+        pytest.skip(f"{request.param} not in this Mitsuba build")
+    pm.register(request.param)
+    try:
+        yield request.param
+    finally:
+        mi.set_variant(VARIANT)
+
+
+class LogCapture(mi.Appender):
+    """Mitsuba's log lines as ``(level, text)`` (add it with ``mi.logger().add_appender``)."""
+
+    def __init__(self):
+        super().__init__()
+        self.lines = []
+
+    def append(self, level, text):
+        self.lines.append((level, text))
+
+    def log_progress(self, *args):
+        pass

@@ -94,6 +94,15 @@ def test_derivatives_flow_through_the_nested_bsdf():
     assert fd == pytest.approx(math.sqrt(0.71) / math.pi, rel=1e-3)
 
 
+@pytest.mark.parametrize("nested", [{"type": "conductor"}, {"type": "dielectric"}])
+def test_a_delta_bsdf_is_refused_as_having_no_albedo(nested):
+    """A nested BSDF of delta lobes only (a mirror, a smooth dielectric) has no albedo to
+    tabulate: refused at load with that reason (before: a NumPy reshape error, or for the
+    dielectric only its non-reciprocity)."""
+    with pytest.raises(Exception, match="has only delta lobes .* no albedo to compensate"):
+        plugin(nested)
+
+
 def test_bad_method_is_refused_with_the_choices():
     with pytest.raises(Exception, match="parameter 'method' must be one of kulla-conty, pumping-up"):
         plugin(DIFFUSE, "scale")

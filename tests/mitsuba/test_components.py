@@ -124,13 +124,13 @@ def test_chi2_of_one_component(mask, theta):
 
 # -- the albedo AOV -----------------------------------------------------------------
 
-def albedo_aov(bsdf):
+def albedo_aov(bsdf, below=False):
     """The aov integrator's albedo of a square seen straight on by an orthographic
-    camera (si.wi = n): the mean pixel."""
+    camera (si.wi = n; from below, si.wi = -n, its back face): the mean pixel."""
     scene = mi.load_dict({
         "type": "scene", "integrator": {"type": "aov", "aovs": "a:albedo"},
         "sensor": {"type": "orthographic",
-                   "to_world": mi.ScalarTransform4f().look_at([0, 0, 3], [0, 0, 0], [0, 1, 0]),
+                   "to_world": mi.ScalarTransform4f().look_at([0, 0, -3 if below else 3], [0, 0, 0], [0, 1, 0]),
                    "film": {"type": "hdrfilm", "width": 8, "height": 8, "rfilter": {"type": "box"}},
                    "sampler": {"type": "independent", "sample_count": 1}},
         "square": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(4), "bsdf": bsdf}})
@@ -155,6 +155,19 @@ def test_the_albedo_aov_is_the_diffuse_albedo(bsdf, want):
     """The aov integrator's albedo (eval_diffuse_reflectance) against the closed
     form of each model's diffuse albedo at normal incidence."""
     np.testing.assert_allclose(albedo_aov(bsdf), want, rtol=1e-5)
+
+
+@pytest.mark.parametrize("bsdf,want", [
+    ({"type": "diffuse", "reflectance": 0.5}, 0.5),
+    ({"type": "lambertian", "rd": 0.5}, 0.5),
+    ({"type": "ward", "rd": 0.3}, 0.3),
+    ({"type": "ashikhmin_shirley", "rd": {"type": "rgb", "value": [0.2, 0.4, 0.6]}, "rs": 0.2},
+     np.array([0.2, 0.4, 0.6]) * 0.8 * 31 / 32),
+])
+def test_the_albedo_aov_of_a_back_face_is_the_front_albedo(bsdf, want):
+    """Seen from below (si.wi.z = -1) the albedo AOV is the same closed form, as Mitsuba's
+    diffuse returns its reflectance on either side (issue 43: the plugins returned 0)."""
+    np.testing.assert_allclose(albedo_aov(bsdf, below=True), want, rtol=1e-5)
 
 
 def test_the_albedo_aov_check_can_fail():

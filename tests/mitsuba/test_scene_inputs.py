@@ -85,15 +85,18 @@ def test_srgb_decoding_decides_the_constraint(images):
         mi.load_dict({"type": "modified_phong", "kd": _tex(images["grey"], raw=True), "ks": 0.7})
 
 
-def test_an_8bit_texel_outside_the_range_is_refused(images):
+def test_an_8bit_texel_outside_the_range_is_clamped_with_a_warning(images):
     """Ward's roughness range starts at 1e-4: a raw 8-bit grey PNG with one black
-    texel is refused, and the error names the value."""
+    texel loads clamped (issue 43, as roughconductor), and the warning counts it
+    and names the value."""
     img = np.full((2, 2, 1), 100, np.uint8)
     img[0, 0, 0] = 0
     path = images["grey"].replace("grey", "black")
     mi.Bitmap(img, mi.Bitmap.PixelFormat.Y).write(path)
-    with pytest.raises(LOAD_ERRORS, match="parameter 'alpha_x' must lie in .*got 0 "):
-        mi.load_dict({"type": "ward", "alpha_x": _tex(path, raw=True)})
+    b = mi.load_dict({"type": "ward", "alpha_x": _tex(path, raw=True)})
+    assert b.state.known["alpha_x"] is False
+    assert "parameter 'alpha_x' must lie in [0.0001, 1]; 1 of 4 texels" in b.state.warnings[0]
+    assert "values from 0 to 0.392157" in b.state.warnings[0]
 
 
 # -- vertex colours ------------------------------------------------------------------

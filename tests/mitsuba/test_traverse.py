@@ -118,14 +118,15 @@ def test_update_refuses_what_load_refuses_and_keeps_the_old_values(key, value, m
 
 
 def test_update_of_texture_data_is_checked():
-    """A bitmap nu edited through traverse to hold a negative texel is refused."""
+    """A bitmap nu edited through traverse to hold a NaN texel is refused (one outside
+    the range is clamped with a warning: tests/mitsuba/test_texture_ranges.py)."""
     data = np.full((2, 2, 1), 20.0, dtype=np.float32)
     bsdf = mi.load_dict({"type": "ashikhmin_shirley",
                          "nu": {"type": "bitmap", "data": mi.TensorXf(data), "raw": True}})
     params = mi.traverse(bsdf)
-    data[0, 1, 0] = -5.0
+    data[0, 1, 0] = np.nan
     params["nu.data"] = mi.TensorXf(data)
-    with pytest.raises(ValueError, match="parameter 'nu' must lie in .*got -5.*clamped"):
+    with pytest.raises(ValueError, match="parameter 'nu' must lie in .*1 texel.* not a number.*clamped"):
         params.update()
     assert bsdf.state.known["nu"] is False
 

@@ -1,9 +1,12 @@
 """Textured parameters are range-checked (issue 19): bitmap and checkerboard
-textures at load from their data, cross-parameter constraints at every texel,
+textures at load from their data (out of range: clamped with a warning, issue 43),
+cross-parameter constraints at every texel,
 textures of unknown range clamped per shading point; every alias of every
 plugin sets the parameter it names."""
 
 from __future__ import annotations
+
+import re
 
 import numpy as np
 import pytest
@@ -60,10 +63,13 @@ mi.register_texture("plausible_test_ramp", lambda props: Ramp(props))
     ("reciprocal_phong", "n", checker(10.0, 2e6), "2e\\+06"),
     ("modified_phong", "kd", bitmap([[[0.1, 0.2, 1.5]], [[0.1, 0.2, 0.3]]]), "1.5"),
 ])
-def test_out_of_range_texels_are_refused_at_load(plugin, name, tex, bad):
-    """The error names the plugin, the parameter, its range and the texel value."""
-    with pytest.raises(LOAD_ERRORS, match=f"{plugin}: parameter '{name}' must lie in .*got {bad} "):
-        mi.load_dict({"type": plugin, name: tex})
+def test_out_of_range_texels_are_clamped_with_a_warning(plugin, name, tex, bad):
+    """As Mitsuba (issue 43; refused before): the texture loads, is clamped per shading
+    point (not known), and the one warning names the plugin, the parameter, its range and
+    the texel value."""
+    b = mi.load_dict({"type": plugin, name: tex})
+    assert b.state.known[name] is False and len(b.state.warnings) == 1
+    assert re.search(f"{plugin}: parameter '{name}' must lie in .*values from .*{bad}", b.state.warnings[0])
 
 
 def test_in_range_textures_load_and_are_known():
@@ -161,3 +167,18 @@ def test_ward_alpha_is_isotropic_roughness():
     assert not b.flags() & mi.BSDFFlags.Anisotropic
     with pytest.raises(LOAD_ERRORS, match="'alpha_x' given twice"):
         mi.load_dict({"type": "ward", "alpha": 0.3, "alpha_x": 0.2})
+
+
+@pytest.mark.parametrize("plugin,name,choices", [
+    ("neumann_metal", "fresnel", "{none, schlick, conductor}"),
+    ("pumped_up", "correction", "{max, controlled, controlled-product}"),
+])
+def test_a_texture_on_a_choice_parameter_is_refused_in_one_line(plugin, name, choices):
+    """A texture where a choice is expected: the message's last line (what Mitsuba shows)
+    names the plugin, the parameter, the texture's class and ends with the allowed
+    choices, not with the texture printed over many lines (issue 43: it ended in ']')."""
+    with pytest.raises(LOAD_ERRORS) as err:
+        mi.load_dict({"type": plugin, name: checker(0.2, 0.4)})
+    last = str(err.value).strip().splitlines()[-1]
+    assert f"{plugin}: parameter '{name}' takes no texture (got Checkerboard)" in last
+    assert last.endswith(f"it must be {choices}")

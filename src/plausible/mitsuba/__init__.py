@@ -53,16 +53,29 @@ _REGISTERED: dict = {}
 def register(variant: str | None = None) -> list:
     """Register a Mitsuba BSDF plugin for every registered plausible model.
 
-    Plugins are registered for the current Mitsuba variant (``variant`` sets it
-    first; with none set, :func:`plausible.mitsuba.variant.preferred` is tried, ``cuda_ad_rgb``
-    where an NVIDIA GPU is found, else ``llvm_ad_rgb``, then ``scalar_rgb``).  Call
-    again after switching variants.  Returns the plugin names (those of
-    :func:`plugin_names`, then ``merl``, ``plausible_material`` and ``plausible_compensated``).
+    Plugins are registered for the current Mitsuba variant; with none set,
+    :func:`plausible.mitsuba.variant.preferred` is tried (``cuda_ad_rgb`` where an NVIDIA GPU
+    is found, else ``llvm_ad_rgb``), then ``scalar_rgb``.  ``variant`` is
+    ``mi.set_variant(variant)`` first, **and the variant stays set**: Mitsuba
+    registers a plugin for the variant that is active, so
+    ``register("llvm_ad_spectral")`` makes ``llvm_ad_spectral`` the global
+    variant (announced in Mitsuba's log at ``Info`` when it replaces another);
+    ``mi.set_variant(old)`` goes back, where the plugins registered before still
+    are.  Mitsuba keeps plugins per variant: after ``mi.set_variant(other)``,
+    call ``register()`` again, else ``mi.load_dict`` says only ``Plugin
+    "lambertian" not found!`` (:func:`load_dict` adds this hint).  Returns the
+    plugin names (those of :func:`plugin_names`, then ``merl``,
+    ``plausible_material`` and ``plausible_compensated``).
     """
     import mitsuba as mi
 
     if variant is not None:
+        before = mi.variant()
         mi.set_variant(variant)
+        if before is not None and before != variant:
+            mi.Log(mi.LogLevel.Info, f"plausible.mitsuba.register: the Mitsuba variant is now {variant!r} "
+                                     f"(was {before!r}; mi.set_variant({before!r}) goes back, its plugins "
+                                     f"stay registered)")
     ensure_variant()
     classes = _REGISTERED.setdefault(mi.variant(), {})
     made = {plugin: (lambda m=model, p=plugin: make_plugin_class(p, m)) for plugin, model in plugin_names().items()}
@@ -79,5 +92,36 @@ def register(variant: str | None = None) -> list:
     return out
 
 
-__all__ = ["VARIANTS", "ensure_variant", "register", "plugin_names", "aliases_for", "make_plugin_class", "make_merl_class",
+def not_registered_hint(err: Exception) -> str | None:
+    """The hint for Mitsuba's ``Plugin "NAME" not found!`` when NAME is a plausible plugin
+    not registered in the current variant (None for any other error)."""
+    import re
+
+    import mitsuba as mi
+
+    found = re.search(r'Plugin "([^"]+)" not found', str(err))
+    known = set(plugin_names()) | {"merl", "plausible_material", "plausible_compensated"}
+    if found is None or found.group(1) not in known:
+        return None
+    return (f"plausible.mitsuba: the plugin {found.group(1)!r} is not registered in the variant "
+            f"{mi.variant()!r}: Mitsuba keeps plugins per variant, so call plausible.mitsuba.register() "
+            f"again after mi.set_variant({mi.variant()!r})")
+
+
+def load_dict(desc: dict, **kw):
+    """``mi.load_dict(desc)``; where it fails because a plausible plugin is not registered
+    in the current variant (the variant was switched after :func:`register`), the
+    RuntimeError ends with the hint to call :func:`register` again."""
+    import mitsuba as mi
+
+    try:
+        return mi.load_dict(desc, **kw)
+    except RuntimeError as err:
+        hint = not_registered_hint(err)
+        if hint is None:
+            raise
+        raise RuntimeError(f"{err}\n{hint}") from None
+
+
+__all__ = ["VARIANTS", "ensure_variant", "register", "load_dict", "not_registered_hint", "plugin_names", "aliases_for", "make_plugin_class", "make_merl_class",
            "COMMON_ALIASES", "PLUGIN_ALIASES"]

@@ -25,7 +25,8 @@ BSDF's ``str()``, which names the plugin and every parameter).  At a shading poi
 The tables are constants: derivatives flow through the nested BSDF's value, not through the
 change of its albedo with its parameters (a table is rebuilt only at load).  The nested BSDF
 must be reciprocal (a ``NonSymmetric`` one is refused) and its smooth reflection is what is
-compensated; delta lobes (``conductor``) have no albedo to tabulate.
+compensated; delta lobes (``conductor``) have no albedo to tabulate: a nested BSDF made of
+delta lobes only is refused at load with that reason.
 """
 
 from __future__ import annotations
@@ -55,7 +56,13 @@ def build_model(mi, nested, method: str, times: int = 1, correction: str = "max"
 
     if method not in METHODS:
         raise ValueError(f"{PLUGIN}: parameter 'method' must be one of {', '.join(METHODS)}, got {method!r}")
-    if int(nested.flags()) & int(mi.BSDFFlags.NonSymmetric):
+    flags = int(nested.flags())
+    if flags & int(mi.BSDFFlags.Delta) and not flags & int(mi.BSDFFlags.Smooth):
+        raise ValueError(f"{PLUGIN}: the nested BSDF {str(nested).splitlines()[0].rstrip('[')} has only delta "
+                         f"lobes (a perfect mirror or refraction: it reflects into single directions), so it has "
+                         f"no albedo to compensate; nest a rough BSDF instead (roughconductor, roughplastic, "
+                         f"principled or a plausible plugin)")
+    if flags & int(mi.BSDFFlags.NonSymmetric):
         raise ValueError(f"{PLUGIN}: the nested BSDF {str(nested).splitlines()[0]} is not reciprocal "
                          f"(NonSymmetric); both operators need f(L, V) = f(V, L)")
     with progress.reporting(progress.ambient() or mitsuba_progress(mi, PLUGIN)):

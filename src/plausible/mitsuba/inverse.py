@@ -29,14 +29,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import load_dict
+
 
 def sphere_scene(bsdf: dict, res: int = 32, spp: int = 4):
     """A unit sphere seen from ``+x`` (its shading tangent ``sh_frame.s`` runs
     around the ``z`` axis, horizontally in the image), lit by two point lights
-    that give two highlights; ``prb`` with ``max_depth = 2``."""
+    that give two highlights; ``prb`` with ``max_depth = 2``.  Loaded by
+    :func:`plausible.mitsuba.load_dict` (a plugin not registered in the current
+    variant: the error says to call ``register()`` again)."""
     import mitsuba as mi
 
-    return mi.load_dict({
+    return load_dict({
         "type": "scene",
         "integrator": {"type": "prb", "max_depth": 2},
         "sensor": {"type": "perspective", "fov": 35,

@@ -48,7 +48,7 @@ def lobe_kinds(lobe) -> frozenset:
     return frozenset({lobe.kind}) if isinstance(lobe.kind, str) else frozenset(lobe.kind)
 
 
-def bsdf_flags(mi, model, info, varying: bool):
+def bsdf_flags(mi, model, info, varying: bool, isotropic: bool | None = None):
     """``(flags, components, sampled)`` of a model, as pbrt's ``BxDF::Flags()``
     and Mitsuba's ``m_components``: one component per lobe of
     :meth:`plausible.bxdf.BxDF.components`, in order.
@@ -60,6 +60,7 @@ def bsdf_flags(mi, model, info, varying: bool):
     textures; ``NonSymmetric`` for non-reciprocal models.  ``flags`` is their
     union; ``sampled[k]`` the type a sample of component ``k`` reports:
     ``GlossyReflection``, or ``DiffuseReflection`` for a purely diffuse lobe.
+    ``isotropic``: the probe's answer where the caller has it already.
     """
     F = mi.BSDFFlags
     common = F.FrontSide
@@ -67,7 +68,7 @@ def bsdf_flags(mi, model, info, varying: bool):
         common |= F.SpatiallyVarying
     if not info.reciprocal:
         common |= F.NonSymmetric
-    aniso = not is_isotropic(model)
+    aniso = not (is_isotropic(model) if isotropic is None else isotropic)
     components, sampled = [], []
     for lobe in model.components():
         kinds = lobe_kinds(lobe)
@@ -195,9 +196,10 @@ class ParamState:
     from the current values (textures at their clamped mean).
     """
 
-    def __init__(self, mi, plugin, info, props, alias, log=None, make=None, ignore=()):
+    def __init__(self, mi, plugin, info, props, alias, log=None, make=None, ignore=(), warn=None):
         self.mi, self.plugin, self.info = mi, plugin, info
         self.log = log
+        self.warn = warn if warn is not None else (lambda text: mi.Log(mi.LogLevel.Warn, text))
         self.make = make if make is not None else info.cls
         keys = [k for k in props.keys() if k not in ignore]
         material = props["material"] if "material" in props else None
@@ -235,6 +237,10 @@ class ParamState:
             values.pop(name, None)
         self.derived = {k for k, v in values.items()
                         if v is None and k in info.cls.DERIVED and k not in self.given}
+        self.warned, self.warnings = set(), []
+        # what params.update() changed (None: everything, as at load); textures' means; the
+        # last pointwise check's inputs
+        self.dirty, self.means, self.pointwise_key, self._iso = None, {}, None, (None, None)
         self.known = {k: self._check_texture(k) for k in self.textures}
         self.arrays, self.flags, self.fixed = {}, {}, {}
         for name, v in values.items():
@@ -247,11 +253,13 @@ class ParamState:
         self.exact = {n: (values[n], np.array(a)) for n, a in self.arrays.items()}
         self.q_opaque = ()
         self.build()
-        # sampling constants that may change (traversed) and that the sampler takes as arrays
-        self.q_opaque = [k for k, f in self.flags.items()
-                         if f == mi.ParamFlags.Differentiable and array_safe(mi, self.model, k)]
-        self._set_sampling()
         self.varying = [k for k, t in self.textures.items() if P.texture_varies(t)]
+        # sampling constants that may change (traversed arrays, constant textures such as
+        # <rgb>) and that the sampler takes as arrays: opaque, so a new value is kernel data
+        changing = [k for k, f in self.flags.items() if f == mi.ParamFlags.Differentiable]
+        changing += [k for k in self.textures if k not in self.varying and k in self.q_const]
+        self.q_opaque = [k for k in changing if array_safe(mi, self.model, k)]
+        self._set_sampling()
         self.q_varying = [k for k in self.varying if array_safe(mi, self.model, k)]
         for k in set(self.varying) - set(self.q_varying):
             self._log(f"{plugin}: sampling uses the mean of texture {k!r} (the model's "
@@ -262,11 +270,20 @@ class ParamState:
             self.log(text)
 
     def _check_texture(self, name) -> bool:
-        known = P.check_texture(self.mi, self.plugin, self.info.param(name), self.textures[name])
-        if not known:
+        """Is the texture of ``name`` known to lie in the range (else it is clamped per
+        shading point)?  A texture with texels outside is warned about once per plugin
+        (:func:`props.range_warning`; ``warnings`` keeps the texts)."""
+        prm, tex = self.info.param(name), self.textures[name]
+        found = P.check_texture(self.mi, self.plugin, prm, tex)
+        text = P.range_warning(self.plugin, prm, tex, found, self.given.get(name))
+        if text is not None and id(tex) not in self.warned:  # one texture, one warning (Ward's alpha)
+            self.warned.add(id(tex))
+            self.warnings.append(text)
+            self.warn(text)
+        elif not found.total:
             self._log(f"{self.plugin}: the range of texture {name!r} cannot be read; "
-                      f"it is clamped to {self.info.param(name).range_text()} per shading point")
-        return known
+                      f"it is clamped to {prm.range_text()} per shading point")
+        return found.known
 
     def values(self) -> dict:
         """The current Python value of every non-texture parameter: the value last
@@ -277,7 +294,9 @@ class ParamState:
         for name, a in self.arrays.items():
             prm = self.info.param(name)
             value, image = self.exact.get(name, (None, None))
-            if image is not None and np.array_equal(np.asarray(a), image):
+            if image is not None and self.dirty is not None and name not in self.dirty:
+                out[name] = value  # not among the parameters params.update() changed: not read back
+            elif image is not None and np.array_equal(np.asarray(a), image):
                 out[name] = value
             else:
                 out[name] = prm.validate(untraverse(prm, a, self.templates[name]), self.plugin)
@@ -292,7 +311,9 @@ class ParamState:
         no_mean = []
         for name, tex in self.textures.items():
             prm = self.info.param(name)
-            mean = P.texture_mean(tex)
+            if self.dirty is None or name in self.dirty or name not in self.means:
+                self.means[name] = P.texture_mean(tex)
+            mean = self.means[name]
             if mean is None:
                 no_mean.append(name)
                 continue
@@ -300,17 +321,34 @@ class ParamState:
         with progress.reporting(progress.ambient() or mitsuba_progress(self.mi, self.plugin)):
             model = self._make_without_means(consts, no_mean)
         known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
-        if known:
+        if known and P.has_constraints(self.info):
             base = {k: v for k, v in consts.items() if k not in known}
-            pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
-            P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
+            # again only where a textured value or another parameter changed (1.4 s for a 256^2 map)
+            key = (sorted(known), repr(sorted(base.items())))
+            if self.dirty is None or set(known) & self.dirty or key != self.pointwise_key:
+                pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
+                P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
+            self.pointwise_key = key
         self.model = model
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
         self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
         self._set_sampling()
         self.m_flags, self.components, self.sampled_types = bsdf_flags(
-            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()))
+            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()),
+            self._isotropic(model, consts))
         self.lobe_types = lobe_types(self.mi, model)
+
+    def _isotropic(self, model, consts) -> bool:
+        """:func:`~plausible.analysis.is_isotropic` of ``model`` (the probe: two NumPy
+        evaluations of 96 pairs, 2-3 ms, most of a ``params.update()``), probed again only
+        when what can change it changed: a scalar parameter, or whether a colour is zero (a
+        colour scales a lobe: at zero an anisotropic lobe vanishes).  A new colour of an
+        optimisation step reuses the answer."""
+        key = tuple(sorted((k, bool(np.all(np.asarray(v) == 0)) if self.info.param(k).is_color else repr(v))
+                           for k, v in consts.items()))
+        if self._iso[0] != key:
+            self._iso = (key, is_isotropic(model))
+        return self._iso[1]
 
     def describe(self) -> str:
         """The parameters as the scene gave them: numbers as values, a texture as
@@ -354,16 +392,18 @@ class ParamState:
             self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
 
     def changed(self, keys):
-        """After ``params.update()``: rebuild, or restore the previous values and
-        raise if the new ones are refused."""
-        for k in self.textures:
+        """After ``params.update()`` of the parameters ``keys`` (Mitsuba passes the names
+        that changed; none: all): check the textures among them, rebuild, or restore the
+        previous values and raise if the new ones are refused."""
+        self.dirty = set(keys) if keys else None
+        for k in [k for k in self.textures if k in keys or not keys]:  # the textures that changed
             try:
                 self.known[k] = self._check_texture(k)
             except ValueError as err:
                 # a texture cannot be given back its old data: it is clamped from now on
                 self.known[k] = False
                 raise ValueError(f"{err} (params.update() refused; the texture is clamped to "
-                                 f"the range per shading point until it is valid)") from None
+                                 f"the range per shading point)") from None
         try:
             self.build()
         except ValueError as err:
@@ -431,11 +471,22 @@ def _lobe_methods(mi, dr):
             return [any(ctx.is_enabled(t, k) for t in kinds) for k, kinds in enumerate(self.state.lobe_types)]
 
         @staticmethod
+        def _unpolarized(v):
+            """A value of the model (a Float, or a tuple of channels) as Mitsuba's
+            ``UnpolarizedSpectrum``.  In the monochrome variants (``llvm_ad_mono``,
+            ``*_mono_polarized``) three channels (an RGB colour held as numbers or a
+            ``Color3f``: a published fit, a MERL table) become their luminance, ``mi.luminance``
+            (Rec. 709 weights), as Mitsuba's own ``srgb`` texture evaluates there."""
+            if mi.is_monochromatic and (isinstance(v, mi.Color3f) or isinstance(v, tuple) and len(v) == 3):
+                v = mi.luminance(v if isinstance(v, mi.Color3f) else mi.Color3f(*v))
+            return mi.UnpolarizedSpectrum(*v) if isinstance(v, tuple) else mi.UnpolarizedSpectrum(v)
+
+        @staticmethod
         def _spectrum(v):
             """A value of the model as Mitsuba's ``Spectrum``; in the polarized
             variants a depolarizer (only ``M00``), as Mitsuba's ``diffuse`` and
             ``roughplastic`` return: the models have no polarization."""
-            s = mi.UnpolarizedSpectrum(*v) if isinstance(v, tuple) else mi.UnpolarizedSpectrum(v)
+            s = v if isinstance(v, mi.UnpolarizedSpectrum) else PlausibleLobes._unpolarized(v)
             return mi.depolarizer(s) if mi.is_polarized else s
 
         def _value(self, ctx, si, wo_c, enabled):
@@ -446,8 +497,7 @@ def _lobe_methods(mi, dr):
             wi_c = self._split(si.wi)
             light, view = (wi_c, wo_c) if ctx.mode == mi.TransportMode.Importance else (wo_c, wi_c)
             f = mixture_f(ops, self.model, light, view, self.state.p(si), enabled, components=True)
-            f = mi.UnpolarizedSpectrum(*f) if isinstance(f, tuple) else mi.UnpolarizedSpectrum(f)
-            return f * dr.maximum(wo_c[2], 0.0)
+            return self._unpolarized(f) * dr.maximum(wo_c[2], 0.0)
 
     return PlausibleLobes
 
@@ -511,18 +561,19 @@ def _interface_methods(mi, dr, base):
             :attr:`plausible.bxdf.Lobe.albedo`: ``rd``, ``kd``; Ashikhmin-Shirley's
             coupled term ``rd (1 - rs) (1 - (1 - cos/2)^5)``), as ``diffuse`` and
             ``roughplastic`` return their reflectance (the ``aov`` integrator's
-            ``albedo``).  A model without a diffuse lobe: Mitsuba's default,
-            ``pi eval(wo = n)``, as ``roughconductor``."""
+            ``albedo``).  On a back face (``si.wi.z < 0``) the albedo of ``si.wi``
+            mirrored to the front, as ``diffuse`` returns its reflectance on either
+            side.  A model without a diffuse lobe: Mitsuba's default,
+            ``pi eval(wo = n)``, as ``roughconductor`` (0 on a back face)."""
             ops = drjit_ops(mi.Float)
             albedos = [lb.albedo for lb in self.model.components() if lb.albedo is not None]
             if not albedos:
                 n = mi.Vector3f(0.0, 0.0, 1.0)
                 return self.eval(mi.BSDFContext(), si, n, active) * dr.pi
             p = self.state.p(si)
-            wi_c = self._split(si.wi)
+            wi_c = (si.wi.x, si.wi.y, dr.abs(si.wi.z))
             total = add_values([a(ops, wi_c, p) for a in albedos])
-            value = mi.UnpolarizedSpectrum(*total) if isinstance(total, tuple) else mi.UnpolarizedSpectrum(total)
-            return self._spectrum(dr.select(active & (si.wi.z > 0), value, 0.0))
+            return self._spectrum(dr.select(active, self._unpolarized(total), 0.0))
 
     return PlausibleInterface
 

@@ -12,11 +12,13 @@ textures as fully as their data allows:
   model spec); :func:`metal_textures` for ``material=``;
 * textures: :func:`texture_texels` (every value a bitmap / checkerboard /
   constant texture can take, read from ``mi.traverse``), :func:`check_texture`
-  (the parameter's range against the smallest and largest texel) and
-  :func:`check_pointwise` (cross-parameter constraints, e.g. Modified Phong's
+  (how many texels leave the parameter's range: as Mitsuba, such a texture is
+  clamped into the range at each shading point, with one warning,
+  :func:`range_warning`; the same in spectral variants, :func:`spectral_texels`)
+  and :func:`check_pointwise` (cross-parameter constraints, e.g. Modified Phong's
   ``kd + ks <= 1``, at every point of a UV grid).  A texture whose values cannot
-  be read (a procedural or spectral texture) is clamped to the parameter's
-  range per shading point instead (:func:`texture_range_known` says which).
+  be read (a procedural texture) is clamped to the parameter's range per shading
+  point too (:func:`texture_range_known` says which).
 
 Every function here takes Mitsuba's module as ``mi`` only where it needs it, so
 that the parts that do not render can be read and tested alone.
@@ -221,6 +223,11 @@ def read_param(mi, prm, props, key, plugin):
     (a string or a sequence is the parameter's own to read:
     :meth:`Param.from_mitsuba <plausible.params.Param.from_mitsuba>`)."""
     raw = props[key]
+    if not prm.numeric and isinstance(raw, mi.Object):
+        # one line, the allowed values last (Mitsuba shows the message's last line)
+        given = f" (given as {key!r})" if key != prm.name else ""
+        raise ValueError(f"{plugin}: parameter {prm.name!r}{given} takes no texture (got "
+                         f"{texture_label(raw)}); it must be {prm.range_text()}")
     if not prm.numeric or isinstance(raw, str):
         return prm.from_mitsuba(raw, plugin)
     if isinstance(raw, (int, float)) and not isinstance(raw, bool):
@@ -396,26 +403,85 @@ def texture_range_known(mi, tex) -> bool:
     return texture_texels(mi, tex) is not None
 
 
-def check_texture(mi, plugin: str, prm, tex) -> bool:
-    """Check the smallest and largest value of ``tex`` against ``prm``'s range.
+class TextureRange(NamedTuple):
+    """What :func:`check_texture` found in a texture's values, per texel (a texel: one
+    row of :func:`texture_texels`; for a scalar parameter its channel mean)."""
 
-    A scalar parameter reads the channel mean of a texel (as the plugin does at
-    a shading point).  Returns False (nothing checked) where the texels cannot
-    be known; raises ValueError naming the plugin, the parameter, the range and
-    the offending texel value otherwise.
+    known: bool       # every value read and inside the range: nothing to clamp
+    outside: int      # texels outside the range (0 where none, or none could be read)
+    total: int        # texels read (0: the values cannot be read)
+    low: float        # the smallest and the largest value read (nan where none)
+    high: float
+
+
+def check_texture(mi, plugin: str, prm, tex) -> TextureRange:
+    """The values of ``tex`` against ``prm``'s range.
+
+    As Mitsuba's own BSDFs, a texture whose values leave the model's range is not
+    refused: the plugin clamps its value into the range at each shading point, and
+    :func:`range_warning` says so once.  The values are read in every variant: the
+    texels themselves (:func:`texture_texels`) in RGB and monochrome variants; in
+    spectral ones (where a bitmap holds spectral coefficients) the texture evaluated at
+    its texel centres over the visible wavelengths (:func:`spectral_texels`), which
+    counts what remains outside after Mitsuba's own upsampling (that clamps a bounded
+    colour into [0, 1]).  ``known`` is False (clamped per shading point) where anything
+    is outside, in spectral variants, and where nothing can be read (a procedural
+    texture).  A texel that is not a number (NaN) cannot be clamped: ValueError
+    naming the plugin, the parameter, the texture and the count.
     """
-    texels = texture_texels(mi, tex)
-    if texels is None:
-        return False
-    vals = texels.mean(axis=1) if not prm.is_color else texels.ravel()
-    bad = ~np.isfinite(vals) | (vals < prm.lo) | (vals > prm.hi)
-    if np.any(bad):
-        v = vals[bad]
-        worst = float(v[np.argmax(np.where(np.isfinite(v), np.abs(v), np.inf))])
-        raise ValueError(f"{plugin}: parameter '{prm.name}' must lie in {prm.range_text()}, got "
-                         f"{worst:g} in its {texture_class(tex)} texture "
-                         f"({int(bad.sum())} of {bad.size} texel values outside)")
-    return True
+    texels, exact = texture_texels(mi, tex), True
+    if texels is None and mi.is_spectral:
+        texels, exact = spectral_texels(mi, tex), False
+    if texels is None or len(texels) == 0:
+        return TextureRange(False, 0, 0, float("nan"), float("nan"))
+    vals = texels.mean(axis=1) if not prm.is_color else texels
+    nan = np.isnan(vals).reshape(len(vals), -1).any(axis=1)
+    if np.any(nan):
+        raise ValueError(f"{plugin}: parameter '{prm.name}' must lie in {prm.range_text()}; its texture "
+                         f"{texture_label(tex)} holds {int(nan.sum())} texel(s) that are not a number (NaN)")
+    out = ((vals < prm.lo) | (vals > prm.hi)).reshape(len(vals), -1).any(axis=1)
+    return TextureRange(exact and not np.any(out), int(out.sum()), len(out), float(np.min(vals)), float(np.max(vals)))
+
+
+def range_warning(plugin: str, prm, tex, found: TextureRange, given: str | None = None) -> str | None:
+    """The one warning of a texture with values outside ``prm``'s range (None where it has
+    none): the plugin, the parameter (and the name the scene gave, ``given``, where that
+    differs: Ward's ``alpha``), the range, the texture and how many texels."""
+    if not found.outside:
+        return None
+    name = f"'{prm.name}'" + (f" (given as '{given}')" if given and given != prm.name else "")
+    return (f"{plugin}: parameter {name} must lie in {prm.range_text()}; {found.outside} of "
+            f"{found.total} texels of its texture {texture_label(tex)} lie outside (values from "
+            f"{found.low:g} to {found.high:g}): clamped into the range at each shading point")
+
+
+#: Wavelengths (nm) at which :func:`spectral_texels` evaluates a texture: Mitsuba's
+#: visible range, 360-830 nm, in steps of 10 nm.
+SPECTRAL_CHECK_NM = np.arange(360.0, 831.0, 10.0)
+
+
+def spectral_texels(mi, tex):
+    """In a spectral variant: the values of a texture of :data:`KNOWN_TEXTURES` at its texel
+    centres (a bitmap's grid at its resolution, capped at 256 x 256 points, 64 x 64 in a
+    scalar variant; 8 x 8 for a checkerboard; one point for a constant) at the wavelengths
+    :data:`SPECTRAL_CHECK_NM`, rows ``(points, wavelengths)``; None for other textures."""
+    import drjit as dr
+
+    if texture_class(tex) not in KNOWN_TEXTURES:
+        return None
+    params = mi.traverse(tex)
+    sizes = [np.array(params[k]).shape[:2] for k in params.keys() if k.split(".")[-1] == "data"]
+    res = max(max(s) for s in sizes) if sizes else (8 if tex.is_spatially_varying() else 1)
+    res = min(res, 256 if dr.is_array_v(mi.Float) else 64)
+    c = (np.arange(res) + 0.5) / res
+    u, v = np.meshgrid(c, c, indexing="xy")
+    uv = np.stack([u.ravel(), v.ravel()], -1)
+    n = dr.size_v(mi.Spectrum)
+    cols = []
+    for at in range(0, len(SPECTRAL_CHECK_NM), n):
+        wl = np.resize(SPECTRAL_CHECK_NM[at:at + n], n)
+        cols.append(eval_at_uv(mi, tex, uv, wavelengths=wl))
+    return np.concatenate(cols, axis=1)
 
 
 def uv_grid(mi, textures) -> np.ndarray:
@@ -432,12 +498,26 @@ def uv_grid(mi, textures) -> np.ndarray:
     return np.stack([u.ravel(), v.ravel()], -1)
 
 
-def eval_at_uv(mi, tex, uv: np.ndarray) -> np.ndarray:
-    """``tex.eval`` at the UV points ``uv`` ``(m, 2)``: array ``(m, channels)``."""
+def eval_at_uv(mi, tex, uv: np.ndarray, wavelengths=None) -> np.ndarray:
+    """``tex.eval`` at the UV points ``uv`` ``(m, 2)``: array ``(m, channels)``: one
+    vectorised interaction, or in a scalar variant (``scalar_rgb``, whose interaction
+    holds one point) one call per point (about 10 us each).  ``wavelengths``: those of
+    the interaction (a spectral variant), one per channel of ``mi.Spectrum``."""
     import drjit as dr
 
+    if not dr.is_array_v(mi.Float):
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        if wavelengths is not None:
+            si.wavelengths = mi.Spectrum(*[float(w) for w in wavelengths])
+        out = []
+        for u, v in np.asarray(uv, dtype=np.float64):
+            si.uv = mi.Point2f(float(u), float(v))
+            out.append(np.atleast_1d(np.array(tex.eval(si), dtype=np.float64)))
+        return np.array(out).reshape(len(uv), -1)
     si = dr.zeros(mi.SurfaceInteraction3f, len(uv))
     si.uv = mi.Point2f(np.ascontiguousarray(uv.T, dtype=np.float32))
+    if wavelengths is not None:
+        si.wavelengths = mi.Spectrum(*[float(w) for w in wavelengths])
     return np.array(tex.eval(si), dtype=np.float64).T
 
 
@@ -457,6 +537,14 @@ def values_at_uv(mi, info, textures: dict, uv) -> PointValues:
     return PointValues(uv, vals)
 
 
+def has_constraints(info) -> bool:
+    """Does the model have constraints between parameters (a ``_validate`` of its own),
+    which :func:`check_pointwise` checks?"""
+    from ..bxdf import BxDF
+
+    return info.cls._validate is not BxDF._validate
+
+
 def check_pointwise(plugin: str, info, constants: dict, points: PointValues, warn=None) -> int:
     """Cross-parameter constraints at every point: build the model (the NumPy
     one, whose constructor checks them) for each distinct combination of the
@@ -468,9 +556,7 @@ def check_pointwise(plugin: str, info, constants: dict, points: PointValues, war
     naming the plugin, the UV point and the values there.  Returns the number of
     combinations checked.
     """
-    from ..bxdf import BxDF
-
-    if info.cls._validate is BxDF._validate:
+    if not has_constraints(info):
         return 0
     names = list(points.values)
     cols = [np.asarray(points.values[n]).reshape(len(points.uv), -1) for n in names]
@@ -507,5 +593,7 @@ __all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", 
            "check_material", "conductor_name", "MITSUBA_CONDUCTORS", "read_param",
            "read_number", "read_texture", "metal_textures", "texture_texels",
            "texture_range_known", "texture_mean", "texture_varies", "srgb_to_linear",
-           "bitmap_values", "bitmap_is_raw", "check_texture", "uv_grid", "values_at_uv", "check_pointwise",
+           "bitmap_values", "bitmap_is_raw", "check_texture", "TextureRange", "range_warning", "spectral_texels",
+           "SPECTRAL_CHECK_NM", "uv_grid", "values_at_uv", "check_pointwise",
+           "has_constraints",
            "PointValues"]
