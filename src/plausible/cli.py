@@ -756,6 +756,7 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
     from .fitting import batch
     from .fitting.batch_report import write_report
 
+    _no_stdout(out, "fit-batch writes a results folder (OUT/fits/MODEL.csv)")
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
     bad = []
@@ -786,9 +787,8 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
     except ValueError as e:     # the folder cannot be written (read-only, disk full): what is kept, how to resume
-        _fail(str(e))
-    if s.shared:
-        console.print(f"{s.shared} fits left to another run on {escape(out)}", soft_wrap=True)
+        _fail(_scheduler_flag(e))   # or the scheduler cannot be reached
+    _shared_note(s, "fits", out)
     if s.dashboard:
         console.print(f"Dask dashboard: {s.dashboard}")
     console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "
@@ -797,6 +797,32 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
         first = [t for t in targets][:1]
         p = write_report(out, report, spheres=list(spheres) or first)
         console.print(f"wrote {escape(str(p))}")
+
+
+def _no_stdout(out, what):
+    """Refuse ``--out -`` of a command that writes files (it cannot write to standard output)."""
+    if out == "-":
+        _fail(f"--out -: {what}, which cannot go to standard output; give a path")
+
+
+def _scheduler_flag(e) -> str:
+    """A library error's text with the ``scheduler:`` argument named by its flag."""
+    from .engine import SchedulerError
+
+    return "--scheduler: " + str(e).split(": ", 1)[1] if isinstance(e, SchedulerError) else str(e)
+
+
+def _shared_note(s, what, out):
+    """Say which tasks were left to another run on the same output (and whose claims they are),
+    and which stale claims were taken over."""
+    from rich.markup import escape
+
+    for t in s.taken_over:
+        console.print(f"[yellow]took over a stale claim[/yellow] {escape(t)}", soft_wrap=True)
+    if s.shared:
+        owners = sorted(set(s.left_to.values()))
+        by = f" (claimed by {', '.join(owners[:3])}{' ...' if len(owners) > 3 else ''})" if owners else ""
+        console.print(f"{s.shared} {what} left to another run on {escape(str(out))}{escape(by)}", soft_wrap=True)
 
 
 class _BatchBar:
