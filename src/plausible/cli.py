@@ -683,11 +683,13 @@ def convert_cmd(source, to, out, metric, as_json):
 @click.option("--redo", "--redo-target", "redo", metavar="A,B",
               help="Convert again first the rows of these targets (mitsuba:diffuse, ...), fit sets (ngan2005/ward) "
                    "or materials (material:NAME@FIT) made by other code.")
-def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
+@click.option("--scheduler", metavar="ADDRESS", help="A running Dask scheduler (tcp://host:8786) instead of "
+              "--workers.")
+def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, scheduler):
     """Convert every published fit (material:NAME@FIT) to each target, resumably (docs/convert.md).
 
     Round robin over the fit sets; interrupt at any time and run the same command
-    again to go on.
+    again to go on.  Runs sharing --out share the work (each conversion is claimed).
     """
     from pathlib import Path
 
@@ -695,6 +697,7 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
 
     from .conversion import table
 
+    _no_stdout(out, "convert-table appends its rows to a file as they finish")
     targets = [t.strip() for t in to.split(",") if t.strip()]
     bad = [t for t in targets if t not in table.TARGETS]
     if bad:
@@ -709,15 +712,21 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
                           + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" {r['seconds']:.1f} s",
                           soft_wrap=True)
 
+    problems, runs = [], []
     try:
         rows = table.run_table(out, targets, per_set=per_set, fits=fits_, limit=limit, workers=workers,
-                               on_row=on_row, redo=[t.strip() for t in (redo or "").split(",") if t.strip()])
+                               on_row=on_row, redo=[t.strip() for t in (redo or "").split(",") if t.strip()],
+                               scheduler=scheduler, problems=problems, summary=runs)
     except KeyboardInterrupt:
         console.print(f"[yellow]interrupted[/yellow]: the finished rows are in {escape(out)}; "
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
     except ValueError as e:
-        _fail(str(e).replace("fits: ", "--fits: ").replace("workers ", "--workers "))
+        _fail(_scheduler_flag(e).replace("fits: ", "--fits: ").replace("workers ", "--workers "))
+    for b in problems:
+        console.print(f"[yellow]dropped a duplicated row[/yellow] {escape(b)}", soft_wrap=True)
+    for s in runs:
+        _shared_note(s, "conversions", out)
     all_jobs = table.jobs(targets, per_set, fits_)
     console.print(f"{escape(out)}: {sum(table.key(j) in rows for j in all_jobs)} of {len(all_jobs)} conversions",
                   soft_wrap=True)
