@@ -264,8 +264,10 @@ def eval_cmd(model, params, wi, wo, as_json):
               help="With --materials: write materials-table.md/.csv (and materials.md's summary) here.")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
               help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="With --materials: a running Dask scheduler (tcp://host:8786) instead of --jobs.")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
-          python_obj, all_materials, fit_keys, material_names, out_dir, jobs):
+          python_obj, all_materials, fit_keys, material_names, out_dir, jobs, scheduler):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
@@ -286,8 +288,8 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
-    if all_materials or fit_keys or material_names or out_dir or (jobs and not all_models):
-        return _check_materials(all_materials, fit_keys, material_names, out_dir, jobs, quick, as_json,
+    if all_materials or fit_keys or material_names or out_dir or scheduler or (jobs and not all_models):
+        return _check_materials(all_materials, fit_keys, material_names, out_dir, (jobs, scheduler), quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
     foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
     if not model and not all_models and foreign is None:
@@ -360,21 +362,62 @@ def _print_summary(reports, verdicts):
                f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
 
 
+def _materials_rows(M, keys, names, quick, jobs, scheduler, out_dir, tick, n):
+    """The rows of ``check --materials`` (with ``--out``: journaled in ``DIR/.materials-rows.jsonl``,
+    claimed, resumed; the tables written and the journal removed once every row is there)."""
+    from pathlib import Path
+
+    journal = Path(out_dir) / ".materials-rows.jsonl" if out_dir else None
+    runs = []
+    try:
+        if journal is not None:
+            journal.parent.mkdir(parents=True, exist_ok=True)
+        rows = M.check_fits(keys, names, quick=quick, jobs=jobs or _default_jobs(), progress=tick,
+                            scheduler=scheduler, journal=journal, summary=runs)
+    except KeyboardInterrupt:
+        console.print(f"[yellow]interrupted[/yellow]: the rows checked so far are in {escape(str(journal))}; "
+                      "run the same command again to resume" if journal else "[yellow]interrupted[/yellow]",
+                      soft_wrap=True)
+        sys.exit(130)
+    except OSError as e:
+        _fail(f"--out {out_dir}: cannot write there ({e.strerror or e})")
+    except ValueError as e:
+        _fail(_scheduler_flag(e))
+    for s in runs:
+        _shared_note(s, "fits", out_dir)
+    if journal is None or len(rows) < n:
+        return rows, None
+    try:
+        written = M.write_tables(rows, out_dir)
+    except OSError as e:
+        _fail(f"--out {out_dir}: cannot write the tables ({e.strerror or e}); the rows are kept in {journal}: "
+              "run the same command again once there is room")
+    journal.unlink(missing_ok=True)
+    return rows, written
+
+
 def _default_jobs() -> int:
     from .analysis.suite import default_jobs
 
     return default_jobs()
 
 
-def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_json, other):
+def _check_materials(all_materials, fit_keys, names, out_dir, where, quick, as_json, other):
     """``check --materials``: :func:`plausible.analysis.materials.check_fits` as a table or JSON."""
     import json
 
     from .analysis import materials as M
     from .catalogue import fit_set, materials, suggest
 
+    jobs, scheduler = where
     if not all_materials:
-        _fail("--fit, --material, --out and --jobs go with --materials")
+        _fail("--fit, --material, --out, --jobs and --scheduler go with --materials")
+    if out_dir is not None:
+        _no_stdout(out_dir, "check --materials --out writes materials-table.md/.csv into a folder")
+        if fit_keys or names:
+            _fail("--out writes the table of every published fit (materials-table.md/.csv and the summary in "
+                  "materials.md); a run filtered by --fit/--material would replace it with a part: leave out "
+                  "--out to print the filtered table (or --json), or --fit/--material to write the whole one")
     if other:
         _fail("--materials checks the published fits; it takes no MODEL, -p, --all, --mitsuba, "
               "--mitsuba-xml or --python")
@@ -396,10 +439,8 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
         _fail(f"no fit set {'of ' + ', '.join(keys) + ' ' if keys else ''}has the material(s) {', '.join(names)}")
     tick = silent if as_json else _bar()
     t = tick(len(work), "checking published fits")
-    rows = M.check_fits(keys, names, quick=quick, jobs=jobs or _default_jobs(), progress=t)
+    rows, written = _materials_rows(M, keys, names, quick, jobs, scheduler, out_dir, t, len(work))
     bad = [r for r in rows if r.gains_energy or not r.reciprocal]
-    if out_dir:
-        written = M.write_tables(rows, out_dir)
     if as_json:
         click.echo(json.dumps([r.to_dict() for r in rows], indent=1))
     else:
@@ -419,8 +460,11 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
             console.print(f"[red]{escape(r.material)}@{escape(r.fit)}[/red] {escape(what)}")
         click.echo(f"{len(rows)} fits of {len({r.fit for r in rows})} fit sets checked"
                    f"{' (quick)' if quick else ''}: {len(rows) - len(bad)} plausible, {len(bad)} not")
-        if out_dir:
+        if written:
             click.echo("wrote " + ", ".join(str(p) for p in written))
+        elif out_dir:
+            click.echo(f"{len(work) - len(rows)} fits are another run's: the run that checks the last one writes "
+                       f"the tables into {out_dir}")
     sys.exit(1 if bad else 0)
 
 

@@ -176,6 +176,12 @@ class Claims:
         self.left_to: dict = {}     # key -> owner (described) of the claims left to others
         self.taken_over: list = []  # "key: reason" of the stale claims taken over
 
+    @classmethod
+    def beside(cls, path, prefix: str = "task") -> "Claims":
+        """The claims of the results file ``path``: the hidden folder ``.NAME.claims`` beside it."""
+        p = Path(path)
+        return cls(p.parent / f".{p.name.lstrip('.')}.claims", prefix)
+
     def path(self, key: str) -> Path:
         digest = hashlib.sha1(str(key).encode()).hexdigest()[:20]
         return self.folder / f"{self.prefix}-{digest}"

@@ -233,7 +233,7 @@ def _claims(path):
     from .. import engine
 
     p = Path(path)
-    claims = engine.Claims(p.parent / f".{p.name}.claims", "convert")
+    claims = engine.Claims.beside(p, "convert")
     try:
         claims.folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
