@@ -133,3 +133,25 @@ def test_tasks_in_processes_give_what_this_process_gives_and_a_raising_task_is_f
     assert bad == {1: "no 1", 2: "no 2"}
     with pytest.raises(ValueError, match="no 3"):        # no failed(): the error is raised
         engine.run([3], _boom, lambda t, r: None)
+
+
+def test_without_a_worker_process_the_tasks_run_here(monkeypatch):
+    monkeypatch.setattr(engine, "_start_worker", lambda ctx, work: None)     # at the limit of processes
+    got = {}
+    s = engine.run(range(4), _square, lambda t, r: got.__setitem__(t, r), workers=2)
+    assert got == {x: x * x for x in range(4)} and (s.done, s.workers) == (4, 0)
+
+
+def test_an_interrupt_keeps_what_was_recorded_and_releases_every_claim(tmp_path):
+    claims, got = engine.Claims(tmp_path / "c", "t"), []
+
+    def work(x):
+        if x == 2:
+            raise KeyboardInterrupt
+        return x
+
+    with pytest.raises(KeyboardInterrupt):
+        engine.run(range(5), work, lambda t, r: got.append(r), key=str, claims=claims)
+    assert got == [0, 1] and list(claims.folder.iterdir()) == []
+    s = engine.run([t for t in range(5) if t not in got], _square, lambda t, r: got.append(r), key=str, claims=claims)
+    assert got == [0, 1, 4, 9, 16] and s.done == 3

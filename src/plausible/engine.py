@@ -172,7 +172,7 @@ class Claims:
     and holds :func:`me` with the key and the time (JSON)."""
 
     def __init__(self, folder, prefix: str = "task"):
-        self.folder, self.prefix = Path(folder), prefix
+        self.folder, self.prefix = Path(os.path.abspath(folder)), prefix
         self.left_to: dict = {}     # key -> owner (described) of the claims left to others
         self.taken_over: list = []  # "key: reason" of the stale claims taken over
 
@@ -437,28 +437,27 @@ def _in_processes(pending, work, jobs, finish, fail, s, on_death):
         return n
 
     def spawn():
-        """A fresh worker, fed its first task; False when none could be started or none is left."""
-        mine, theirs = ctx.Pipe()
-        p = ctx.Process(target=_worker, args=(theirs, work), daemon=True)
-        try:
-            p.start()
-        except OSError:               # no process to be had (at the limit of processes or memory)
-            mine.close()
+        """A fresh worker for the next task; False when none is left or no process could be started."""
+        n = next_task()
+        if n is None:
             return False
-        finally:
-            theirs.close()
+        started = _start_worker(ctx, work)
+        if started is None:
+            retry.appendleft(n)
+            return False
+        mine, p = started
         workers[mine] = [p, None]
         s.workers = max(s.workers, len(workers))
-        return feed(mine)
+        feed(mine, n)
+        return True
 
-    def feed(conn):
+    def feed(conn, n=None):
         w = workers[conn]
-        w[1] = next_task()
+        w[1] = next_task() if n is None else n
         try:
             conn.send(None if w[1] is None else (w[1], tasks[w[1]]))
         except OSError:               # it died already: seen as its end of file below
             pass
-        return w[1] is not None
 
     def died(conn):
         p, n = workers.pop(conn)
@@ -495,6 +494,21 @@ def _in_processes(pending, work, jobs, finish, fail, s, on_death):
             _run_here(tasks.pop(n), work, finish, fail)
     finally:
         _stop(workers)
+
+
+def _start_worker(ctx, work):
+    """``(connection, process)`` of a fresh :func:`_worker`, or None when no process can be had
+    (at the limit of processes or memory)."""
+    mine, theirs = ctx.Pipe()
+    p = ctx.Process(target=_worker, args=(theirs, work), daemon=True)
+    try:
+        p.start()
+    except OSError:
+        mine.close()
+        return None
+    finally:
+        theirs.close()
+    return mine, p
 
 
 def _run_here(t, work, finish, fail):
