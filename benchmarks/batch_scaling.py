@@ -1,4 +1,5 @@
-"""Wall time of a fitting batch against the number of local Dask workers, and the
+"""Wall time of a fitting batch against the number of local worker processes (the batch
+engine's, plausible.engine; a Dask LocalCluster before issue 41), and the
 per-fit cost that the docs' cluster estimate (docs/fitting.md, "Batches") is
 computed from.  Run: ``python benchmarks/batch_scaling.py [--workers 1,2]``."""
 

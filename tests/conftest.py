@@ -29,3 +29,32 @@ def random_upper(rng, n, zmin=0.0, zmax=1.0):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A folder on a small tmpfs (mounted here; skipped where the machine cannot mount
+    one) and ``fill()`` / ``free()``: writes to it fail with ENOSPC until ``free()``."""
+    import os
+    import subprocess
+    from types import SimpleNamespace
+
+    root = tmp_path / "tmpfs"
+    root.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(root)],
+                                           capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here (needs root)")
+    filler = root / ".filler"
+
+    def fill():
+        with open(filler, "ab", buffering=0) as fh:
+            try:
+                while True:
+                    fh.write(b"\0" * 4096)
+            except OSError:
+                pass
+
+    try:
+        yield SimpleNamespace(path=root, fill=fill, free=lambda: filler.unlink(missing_ok=True))
+    finally:
+        subprocess.run(["umount", "-l", str(root)], capture_output=True)

@@ -96,9 +96,24 @@ def test_check_materials_json_reports_the_published_table_numbers():
         assert x["error"] <= 1e-5 * 1.01 and x["reciprocal"]
 
 
-def test_check_materials_table_of_a_plausible_fit_exits_zero_and_writes_the_tables(tmp_path):
-    r = run("check", "--materials", "--fit", "ngan2005/ward", "--material", "alum-bronze", "--quick",
-            "--out", str(tmp_path), "--jobs", "1")
+TWO = [("alum-bronze", "ngan2005/ward"), ("beige-fabric", "ngan2005/ward")]
+
+
+@pytest.fixture
+def two_fits(monkeypatch):
+    """Every published fit is these two (so that a whole run takes seconds)."""
+    from plausible.analysis import materials as M
+
+    monkeypatch.setattr(M, "work_list", lambda fits=None, names=None: [
+        w for w in TWO if (fits is None or w[1] in fits) and (names is None or w[0] in names)])
+    return TWO
+
+
+def test_check_materials_table_of_a_plausible_fit_exits_zero_and_writes_the_tables(tmp_path, monkeypatch):
+    from plausible.analysis import materials as M
+
+    monkeypatch.setattr(M, "work_list", lambda fits=None, names=None: [("alum-bronze", "ngan2005/ward")])
+    r = run("check", "--materials", "--quick", "--out", str(tmp_path), "--jobs", "1")
     assert r.exit_code == 0, r.output
     assert "1 fits of 1 fit sets checked (quick): 1 plausible, 0 not" in r.output
     md = (tmp_path / "materials-table.md").read_text()
@@ -126,3 +141,105 @@ def test_check_materials_in_two_processes_gives_the_rows_of_one():
 def test_check_materials_usage_errors(args, words):
     r = run("check", *args)
     assert r.exit_code == 2 and words in r.output, r.output
+
+
+# -- one batch engine under check --materials (issue 41 item 3, issue 45 items 4-5) ---------------
+
+def test_a_filtered_run_does_not_replace_the_full_table(tmp_path):
+    full = "material,fit\n" + "".join(f"m{i},f\n" for i in range(1202))
+    (tmp_path / "materials-table.csv").write_text(full)
+    (tmp_path / "materials.md").write_text("<!-- table:begin -->\nsummary of 1202\n<!-- table:end -->\n")
+    r = run("check", "--materials", "--fit", "ngan2005/ward", "--material", "alum-bronze", "--quick",
+            "--out", str(tmp_path), "--jobs", "1")
+    assert r.exit_code == 2 and "a run filtered by --fit/--material would replace it" in r.output, r.output
+    assert (tmp_path / "materials-table.csv").read_text() == full       # (was: 1 row)
+    assert "summary of 1202" in (tmp_path / "materials.md").read_text()
+
+
+def test_check_materials_refuses_out_dash(tmp_path, monkeypatch, two_fits):
+    monkeypatch.chdir(tmp_path)
+    r = run("check", "--materials", "--quick", "--out", "-")
+    assert r.exit_code == 2 and "--out -: check --materials --out writes" in r.output
+    assert not (tmp_path / "-").exists()
+
+
+def test_an_interrupted_run_resumes_from_its_journal(tmp_path, monkeypatch, two_fits):
+    from plausible.analysis import materials as M
+
+    real, calls = M.check_fit, []
+
+    def check_fit(name, fit, *a, **k):
+        calls.append(name)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(name, fit, *a, **k)
+
+    monkeypatch.setattr(M, "check_fit", check_fit)
+    args = ("check", "--materials", "--quick", "--out", str(tmp_path), "--jobs", "1")
+    r = run(*args)
+    assert r.exit_code == 130 and "run the same command again to resume" in r.output, r.output
+    assert not (tmp_path / "materials-table.csv").exists()
+    assert list(M.read_journal(tmp_path / ".materials-rows.jsonl")) == [TWO[0]]      # (was: nothing kept)
+    r = run(*args)
+    assert r.exit_code == 0, r.output
+    assert calls == ["alum-bronze", "beige-fabric", "beige-fabric"]                  # the first not again
+    rows = (tmp_path / "materials-table.csv").read_text().splitlines()
+    assert [x.split(",")[0] for x in rows[1:]] == ["alum-bronze", "beige-fabric"]
+    assert not (tmp_path / ".materials-rows.jsonl").exists()
+    assert rows[1] == _csv_row(real(*TWO[0], quick=True))                           # the journaled row is the row
+
+
+def _csv_row(r):
+    return (f"{r.material},{r.fit},{r.asymmetry:.3e},{r.max_albedo:.6f},{r.theta_deg:g},{r.channel},"
+            f"{r.albedo_normal:.6f},{r.error:.2e},{int(r.gains_energy)}")
+
+
+def test_a_fit_held_by_another_live_run_is_left_to_it(tmp_path, two_fits):
+    import json
+    import subprocess
+    import sys
+
+    from plausible import engine
+    from plausible.analysis import materials as M
+
+    journal = tmp_path / ".materials-rows.jsonl"
+    settings = M._settings(M.THETAS_DEG, True, None)
+    claims = engine.Claims(tmp_path / ".materials-rows.jsonl.claims", "check")
+    owner = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"])
+    try:
+        p = claims.path(json.dumps([TWO[1], settings]))
+        p.parent.mkdir()
+        p.write_text(json.dumps(dict(engine.me(), pid=owner.pid, start=engine._start_time(owner.pid))))
+        r = run("check", "--materials", "--quick", "--out", str(tmp_path), "--jobs", "1")
+        assert r.exit_code == 0, r.output
+        assert f"1 fits left to another run on {tmp_path} (claimed by PID {owner.pid}" in r.output
+        assert "1 fits are another run's" in r.output and not (tmp_path / "materials-table.csv").exists()
+        assert list(M.read_journal(journal)) == [TWO[0]]
+    finally:
+        owner.kill()
+        owner.wait()
+    r = run("check", "--materials", "--quick", "--out", str(tmp_path), "--jobs", "1")     # its owner is gone
+    assert r.exit_code == 0 and "took over a stale claim" in r.output, r.output
+    assert len((tmp_path / "materials-table.csv").read_text().splitlines()) == 3
+
+
+def test_check_materials_on_a_dask_scheduler_gives_the_rows_of_one_process():
+    distributed = pytest.importorskip("distributed")
+    from plausible.analysis.materials import check_fits
+
+    one = check_fits(["ngan2005/ward"], ["alum-bronze", "beige-fabric"], quick=True, jobs=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as c:
+        got = check_fits(["ngan2005/ward"], ["alum-bronze", "beige-fabric"], quick=True,
+                         scheduler=c.scheduler_address)
+    assert [(r.material, r.fit) for r in got] == [(r.material, r.fit) for r in one]
+    for a, b in zip(one, got):
+        assert b.max_albedo == pytest.approx(a.max_albedo, rel=1e-12) and b.theta_deg == a.theta_deg
+
+
+def test_check_materials_names_a_scheduler_it_cannot_reach(monkeypatch):
+    from plausible import engine
+
+    monkeypatch.setattr(engine, "CONNECT_TIMEOUT", 2.0)
+    r = run("check", "--materials", "--fit", "ngan2005/ward", "--material", "alum-bronze", "--quick",
+            "--scheduler", "tcp://127.0.0.1:1")
+    assert r.exit_code == 2 and "--scheduler: cannot reach the Dask scheduler" in r.output, r.output

@@ -332,8 +332,10 @@ def eval_cmd(model, params, wi, wo, as_json):
               help="With --materials: write materials-table.md/.csv (and materials.md's summary) here.")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
               help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="With --materials: a running Dask scheduler (tcp://host:8786) instead of --jobs.")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
-          python_obj, all_materials, fit_keys, material_names, out_dir, jobs):
+          python_obj, all_materials, fit_keys, material_names, out_dir, jobs, scheduler):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
@@ -354,8 +356,8 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
-    if all_materials or fit_keys or material_names or out_dir or (jobs and not all_models):
-        return _check_materials(all_materials, fit_keys, material_names, out_dir, jobs, quick, as_json,
+    if all_materials or fit_keys or material_names or out_dir or scheduler or (jobs and not all_models):
+        return _check_materials(all_materials, fit_keys, material_names, out_dir, (jobs, scheduler), quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
     foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
     if not model and not all_models and foreign is None:
@@ -428,21 +430,62 @@ def _print_summary(reports, verdicts):
                f"{errors} failed with an error" + (f" ({'; '.join(bad)})" if bad else ""))
 
 
+def _materials_rows(M, keys, names, quick, jobs, scheduler, out_dir, tick, n):
+    """The rows of ``check --materials`` (with ``--out``: journaled in ``DIR/.materials-rows.jsonl``,
+    claimed, resumed; the tables written and the journal removed once every row is there)."""
+    from pathlib import Path
+
+    journal = Path(out_dir) / ".materials-rows.jsonl" if out_dir else None
+    runs = []
+    try:
+        if journal is not None:
+            journal.parent.mkdir(parents=True, exist_ok=True)
+        rows = M.check_fits(keys, names, quick=quick, jobs=jobs or _default_jobs(), progress=tick,
+                            scheduler=scheduler, journal=journal, summary=runs)
+    except KeyboardInterrupt:
+        console.print(f"[yellow]interrupted[/yellow]: the rows checked so far are in {escape(str(journal))}; "
+                      "run the same command again to resume" if journal else "[yellow]interrupted[/yellow]",
+                      soft_wrap=True)
+        sys.exit(130)
+    except OSError as e:
+        _fail(f"--out {out_dir}: cannot write there ({e.strerror or e})")
+    except ValueError as e:
+        _fail(_scheduler_flag(e))
+    for s in runs:
+        _shared_note(s, "fits", out_dir)
+    if journal is None or len(rows) < n:
+        return rows, None
+    try:
+        written = M.write_tables(rows, out_dir)
+    except OSError as e:
+        _fail(f"--out {out_dir}: cannot write the tables ({e.strerror or e}); the rows are kept in {journal}: "
+              "run the same command again once there is room")
+    journal.unlink(missing_ok=True)
+    return rows, written
+
+
 def _default_jobs() -> int:
     from .analysis.suite import default_jobs
 
     return default_jobs()
 
 
-def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_json, other):
+def _check_materials(all_materials, fit_keys, names, out_dir, where, quick, as_json, other):
     """``check --materials``: :func:`plausible.analysis.materials.check_fits` as a table or JSON."""
     import json
 
     from .analysis import materials as M
     from .catalogue import fit_set, materials, suggest
 
+    jobs, scheduler = where
     if not all_materials:
-        _fail("--fit, --material, --out and --jobs go with --materials")
+        _fail("--fit, --material, --out, --jobs and --scheduler go with --materials")
+    if out_dir is not None:
+        _no_stdout(out_dir, "check --materials --out writes materials-table.md/.csv into a folder")
+        if fit_keys or names:
+            _fail("--out writes the table of every published fit (materials-table.md/.csv and the summary in "
+                  "materials.md); a run filtered by --fit/--material would replace it with a part: leave out "
+                  "--out to print the filtered table (or --json), or --fit/--material to write the whole one")
     if other:
         _fail("--materials checks the published fits; it takes no MODEL, -p, --all, --mitsuba, "
               "--mitsuba-xml or --python")
@@ -464,10 +507,8 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
         _fail(f"no fit set {'of ' + ', '.join(keys) + ' ' if keys else ''}has the material(s) {', '.join(names)}")
     tick = silent if as_json else _bar()
     t = tick(len(work), "checking published fits")
-    rows = M.check_fits(keys, names, quick=quick, jobs=jobs or _default_jobs(), progress=t)
+    rows, written = _materials_rows(M, keys, names, quick, jobs, scheduler, out_dir, t, len(work))
     bad = [r for r in rows if r.gains_energy or not r.reciprocal]
-    if out_dir:
-        written = M.write_tables(rows, out_dir)
     if as_json:
         click.echo(json.dumps([r.to_dict() for r in rows], indent=1))
     else:
@@ -487,8 +528,11 @@ def _check_materials(all_materials, fit_keys, names, out_dir, jobs, quick, as_js
             console.print(f"[red]{escape(r.material)}@{escape(r.fit)}[/red] {escape(what)}")
         click.echo(f"{len(rows)} fits of {len({r.fit for r in rows})} fit sets checked"
                    f"{' (quick)' if quick else ''}: {len(rows) - len(bad)} plausible, {len(bad)} not")
-        if out_dir:
+        if written:
             click.echo("wrote " + ", ".join(str(p) for p in written))
+        elif out_dir:
+            click.echo(f"{len(work) - len(rows)} fits are another run's: the run that checks the last one writes "
+                       f"the tables into {out_dir}")
     sys.exit(1 if bad else 0)
 
 
@@ -751,11 +795,13 @@ def convert_cmd(source, to, out, metric, as_json):
 @click.option("--redo", "--redo-target", "redo", metavar="A,B",
               help="Convert again first the rows of these targets (mitsuba:diffuse, ...), fit sets (ngan2005/ward) "
                    "or materials (material:NAME@FIT) made by other code.")
-def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
+@click.option("--scheduler", metavar="ADDRESS", help="A running Dask scheduler (tcp://host:8786) instead of "
+              "--workers.")
+def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, scheduler):
     """Convert every published fit (material:NAME@FIT) to each target, resumably (docs/convert.md).
 
     Round robin over the fit sets; interrupt at any time and run the same command
-    again to go on.
+    again to go on.  Runs sharing --out share the work (each conversion is claimed).
     """
     from pathlib import Path
 
@@ -763,6 +809,7 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
 
     from .conversion import table
 
+    _no_stdout(out, "convert-table appends its rows to a file as they finish")
     targets = [t.strip() for t in to.split(",") if t.strip()]
     bad = [t for t in targets if t not in table.TARGETS]
     if bad:
@@ -777,15 +824,21 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
                           + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" {r['seconds']:.1f} s",
                           soft_wrap=True)
 
+    problems, runs = [], []
     try:
         rows = table.run_table(out, targets, per_set=per_set, fits=fits_, limit=limit, workers=workers,
-                               on_row=on_row, redo=[t.strip() for t in (redo or "").split(",") if t.strip()])
+                               on_row=on_row, redo=[t.strip() for t in (redo or "").split(",") if t.strip()],
+                               scheduler=scheduler, problems=problems, summary=runs)
     except KeyboardInterrupt:
         console.print(f"[yellow]interrupted[/yellow]: the finished rows are in {escape(out)}; "
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
     except ValueError as e:
-        _fail(str(e).replace("fits: ", "--fits: ").replace("workers ", "--workers "))
+        _fail(_scheduler_flag(e).replace("fits: ", "--fits: ").replace("workers ", "--workers "))
+    for b in problems:
+        console.print(f"[yellow]dropped a duplicated row[/yellow] {escape(b)}", soft_wrap=True)
+    for s in runs:
+        _shared_note(s, "conversions", out)
     all_jobs = table.jobs(targets, per_set, fits_)
     console.print(f"{escape(out)}: {sum(table.key(j) in rows for j in all_jobs)} of {len(all_jobs)} conversions",
                   soft_wrap=True)
@@ -824,6 +877,7 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
     from .fitting import batch
     from .fitting.batch_report import write_report
 
+    _no_stdout(out, "fit-batch writes a results folder (OUT/fits/MODEL.csv)")
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
     bad = []
@@ -854,9 +908,8 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
     except ValueError as e:     # the folder cannot be written (read-only, disk full): what is kept, how to resume
-        _fail(str(e))
-    if s.shared:
-        console.print(f"{s.shared} fits left to another run on {escape(out)}", soft_wrap=True)
+        _fail(_scheduler_flag(e))   # or the scheduler cannot be reached
+    _shared_note(s, "fits", out)
     if s.dashboard:
         console.print(f"Dask dashboard: {s.dashboard}")
     console.print(f"{s.done} fits done ({s.failed} failed), {s.skipped} already in {escape(out)}, "
@@ -865,6 +918,32 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
         first = [t for t in targets][:1]
         p = write_report(out, report, spheres=list(spheres) or first)
         console.print(f"wrote {escape(str(p))}")
+
+
+def _no_stdout(out, what):
+    """Refuse ``--out -`` of a command that writes files (it cannot write to standard output)."""
+    if out == "-":
+        _fail(f"--out -: {what}, which cannot go to standard output; give a path")
+
+
+def _scheduler_flag(e) -> str:
+    """A library error's text with the ``scheduler:`` argument named by its flag."""
+    from .engine import SchedulerError
+
+    return "--scheduler: " + str(e).split(": ", 1)[1] if isinstance(e, SchedulerError) else str(e)
+
+
+def _shared_note(s, what, out):
+    """Say which tasks were left to another run on the same output (and whose claims they are),
+    and which stale claims were taken over."""
+    from rich.markup import escape
+
+    for t in s.taken_over:
+        console.print(f"[yellow]took over a stale claim[/yellow] {escape(t)}", soft_wrap=True)
+    if s.shared:
+        owners = sorted(set(s.left_to.values()))
+        by = f" (claimed by {', '.join(owners[:3])}{' ...' if len(owners) > 3 else ''})" if owners else ""
+        console.print(f"{s.shared} {what} left to another run on {escape(str(out))}{escape(by)}", soft_wrap=True)
 
 
 class _BatchBar:

@@ -85,14 +85,9 @@ def test_the_command_writes_the_markdown_of_the_rows_and_refuses_a_bad_target(tm
     assert r.exit_code == 2 and "--to: the table's targets are mitsuba, gltf" in r.output
 
 
-def test_worker_processes_write_every_row_once(tmp_path, monkeypatch):
-    import multiprocessing
-
-    if multiprocessing.get_start_method() != "fork":
-        pytest.skip("the fake conversion reaches the workers by fork only")
-    monkeypatch.setattr(table, "convert_row", _fake_row)
+def test_worker_processes_write_every_row_once(tmp_path):
     path = tmp_path / "t.jsonl"
-    rows = table.run_table(path, ("mitsuba", "gltf"), per_set=2, fits=["ngan2005/ward"], workers=2)
+    rows = table.run_table(path, ("mitsuba", "gltf"), per_set=2, fits=["ngan2005/ward"], workers=2, row=_fake_row)
     assert len(rows) == 4 and len(path.read_text().splitlines()) == 4
     assert set(rows) == {table.key(j) for j in table.jobs(("mitsuba", "gltf"), 2, ["ngan2005/ward"])}
 
@@ -128,3 +123,103 @@ def test_rows_of_a_redone_fit_set_or_material_are_converted_again_in_job_order(t
     # a redo that names nothing in the table converts nothing
     table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward", "ngan2005/blinn-phong"], redo=["x/y"])
     assert len(calls) == 3
+
+
+# -- one batch engine (issue 41 item 3, issue 45 item 5) ------------------------------------------
+
+KW = dict(per_set=3, fits=["ngan2005/ward", "ngan2005/blinn-phong"])
+
+
+def _slow_row(job):
+    import time
+
+    time.sleep(0.05)
+    return _fake_row(job)
+
+
+def test_two_concurrent_runs_write_each_row_once(tmp_path, monkeypatch):
+    import threading
+
+    monkeypatch.setattr(table, "convert_row", _slow_row)
+    path = tmp_path / "t.jsonl"
+    threads = [threading.Thread(target=table.run_table, args=(path, ("mitsuba", "gltf")), kwargs=KW)
+               for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    lines = path.read_text().splitlines()
+    assert len(lines) == len(set(lines)) == 12          # (was: up to 24 lines, each row twice)
+    assert {table.key(json.loads(x)) for x in lines} == {table.key(j) for j in table.jobs(("mitsuba", "gltf"), **KW)}
+    assert list((tmp_path / ".t.jsonl.claims").iterdir()) == []
+
+
+def _kills_its_worker_once(job):
+    import os
+    import signal
+    from pathlib import Path
+
+    mark = Path(os.environ["PLAUSIBLE_TEST_MARK"])
+    if job[2] == "alum-bronze" and job[0] == "gltf" and not mark.exists():
+        mark.touch()
+        os.kill(os.getpid(), signal.SIGKILL)          # as the kernel's out-of-memory killer would
+    return _fake_row(job)
+
+
+def test_a_killed_worker_is_replaced_and_every_row_written(tmp_path, monkeypatch):
+    monkeypatch.setenv("PLAUSIBLE_TEST_MARK", str(tmp_path / "killed"))
+    path, runs = tmp_path / "t.jsonl", []
+    rows = table.run_table(path, ("mitsuba", "gltf"), workers=2, row=_kills_its_worker_once, summary=runs, **KW)
+    assert (tmp_path / "killed").exists()               # (was: BrokenProcessPool, 0 rows saved)
+    assert len(rows) == 12 and not any("error" in r for r in rows.values()) and runs[0].done == 12
+    assert len(path.read_text().splitlines()) == 12
+
+
+def test_a_duplicated_row_is_reported_and_dropped(tmp_path):
+    path = tmp_path / "t.jsonl"
+    a, b = (json.dumps(_fake_row(("mitsuba", "ngan2005/ward", n))) for n in ("alum-bronze", "alumina-oxide"))
+    path.write_text("\n".join([a, b, a]) + "\n")
+    problems = []
+    rows = table.read_rows(path, problems)
+    assert len(rows) == 2
+    assert problems == [f"{path}:3: a second row of mitsuba material:alum-bronze@ngan2005/ward (the first at line 1); "
+                        "dropped"]
+    redone = json.dumps({**_fake_row(("mitsuba", "ngan2005/ward", "alum-bronze")), "code": "new"})
+    path.write_text("\n".join([a, b, redone]) + "\n")    # a row of other code replaces it (--redo)
+    problems = []
+    assert table.read_rows(path, problems)[table.key(json.loads(a))]["code"] == "new" and problems == []
+
+
+def test_a_whole_last_row_lacking_its_newline_is_kept(tmp_path, monkeypatch):
+    monkeypatch.setattr(table, "convert_row", _fake_row)
+    path = tmp_path / "t.jsonl"
+    path.write_text(json.dumps(_fake_row(table.jobs(("mitsuba",), 1, ["ngan2005/ward"])[0])))
+    rows = table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward"])
+    lines = path.read_text().splitlines()
+    assert len(rows) == 2 and len(lines) == 2 and all(json.loads(x) for x in lines)
+
+
+def test_on_a_dask_scheduler_the_rows_of_one_process(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    one = table.run_table(tmp_path / "one.jsonl", ("mitsuba",), row=_fake_row, **KW)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as c:
+        runs = []
+        got = table.run_table(tmp_path / "dask.jsonl", ("mitsuba",), row=_fake_row, scheduler=c.scheduler_address,
+                              summary=runs, **KW)
+    assert got == one and runs[0].workers == 2 and runs[0].done == 6
+
+
+def test_the_command_refuses_out_dash_and_names_a_scheduler_it_cannot_reach(tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from plausible import engine
+    from plausible.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["convert-table", "--out", "-", "--limit", "0"])
+    assert r.exit_code == 2 and "--out -: convert-table appends its rows to a file" in r.output
+    assert not (tmp_path / "-").exists()
+    monkeypatch.setattr(engine, "CONNECT_TIMEOUT", 2.0)
+    r = CliRunner().invoke(main, ["convert-table", "--out", "t.jsonl", "--fits", "ngan2005/ward", "--per-set", "1",
+                                  "--scheduler", "tcp://127.0.0.1:1"])
+    assert r.exit_code == 2 and "--scheduler: cannot reach the Dask scheduler" in r.output, r.output

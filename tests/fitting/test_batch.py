@@ -1,5 +1,5 @@
-"""Batch fitting (`plausible.fitting.batch`, `plausible fit-batch`): a Dask LocalCluster
-of 2 workers gives the same rows as the sequential `fit`; a killed batch resumes
+"""Batch fitting (`plausible.fitting.batch`, `plausible fit-batch`): 2 local worker processes
+of the batch engine give the same rows as the sequential `fit`; a killed batch resumes
 without losing or repeating a fit; a corrupt target is a failed row; a row cut
 short by a crash is repaired; the report names the model with the smallest error."""
 

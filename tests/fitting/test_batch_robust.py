@@ -127,3 +127,105 @@ def test_a_huge_brdf_value_is_named_with_its_line(tmp_path):
     p.write_text("0,0,1,0,0,1,0.5\n0,0,1,0.6,0,0.8,1e300\n")
     with pytest.raises(ValueError, match=r"t.csv:2: column f .* must lie in \[0, 1e\+150\].*got 1e\+300"):
         load_table(p)
+
+
+# -- issue 45 items 3-5: claims that never block, a full disk, a scheduler that is not there ----
+
+def test_an_empty_claim_left_by_a_full_disk_does_not_block_the_fit(tmp_path):
+    task = batch.FitTask("lambertian:rd=0.5", "lambertian", "l2-cos")
+    p = batch._claim_path(tmp_path, task)
+    p.parent.mkdir(parents=True)
+    p.write_text("")                                  # (was: "1 fits left to another run", exit 0, nothing run)
+    r = CliRunner().invoke(main, ["fit-batch", task.target, "--models", "lambertian", "--metrics", "l2-cos",
+                                  "--out", str(tmp_path), "--workers", "0", "--starts", "1"])
+    assert r.exit_code == 0, r.output
+    assert "1 fits done (0 failed)" in r.output and "took over a stale claim" in r.output
+    assert [x["params"]["rd"] for x in batch.load_results(tmp_path)] == [pytest.approx(0.5, rel=1e-6)]
+    assert not p.exists()
+
+
+def test_a_claim_naming_a_live_unrelated_pid_does_not_block_the_fit(tmp_path):
+    import json
+    import socket
+
+    task = batch.FitTask("lambertian:rd=0.5", "lambertian", "l2-cos")
+    p = batch._claim_path(tmp_path, task)
+    p.parent.mkdir(parents=True)
+    p.write_text(json.dumps(dict(host=socket.gethostname(), pid=1)))   # init: alive, and no run of this batch
+    s = batch.fit_batch([task.target], ["lambertian"], ["l2-cos"], tmp_path, workers=0, starts=1)
+    assert (s.done, s.shared) == (1, 0) and "process 1 is not the one that claimed it" in s.taken_over[0]
+
+
+def test_fit_batch_on_a_full_disk_is_exit_2_naming_the_cause_and_resumes_once_freed(full_disk):
+    out = full_disk.path / "res"
+    args = ["fit-batch", "lambertian:rd=0.5", "--models", "lambertian", "--metrics", "l2-cos", "--out", str(out),
+            "--workers", "0", "--starts", "1"]
+    (out / "fits").mkdir(parents=True)
+    full_disk.fill()
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2 and "No space left on device" in r.output, r.output     # (was: a bare OSError)
+    assert r.exception is None or isinstance(r.exception, SystemExit)
+    assert list((out / "fits" / ".claims").iterdir()) == []                         # no empty claim left
+    full_disk.free()
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0 and "1 fits done" in r.output, r.output
+
+
+def test_fit_batch_names_a_scheduler_it_cannot_reach(tmp_path, monkeypatch):
+    from plausible import engine
+
+    monkeypatch.setattr(engine, "CONNECT_TIMEOUT", 2.0)
+    r = CliRunner().invoke(main, ["fit-batch", "lambertian:rd=0.5", "--models", "lambertian", "--out",
+                                  str(tmp_path), "--scheduler", "tcp://127.0.0.1:1"])
+    assert r.exit_code == 2, r.output
+    assert "--scheduler: cannot reach the Dask scheduler at 'tcp://127.0.0.1:1' within 2 s" in r.output
+    assert not list((tmp_path / "fits" / ".claims").glob("*")) if (tmp_path / "fits" / ".claims").exists() else True
+
+
+def test_fit_batch_refuses_out_dash(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["fit-batch", "lambertian:rd=0.5", "--models", "lambertian", "--out", "-"])
+    assert r.exit_code == 2 and "--out -: fit-batch writes a results folder" in r.output
+    assert not (tmp_path / "-").exists()
+
+
+def test_repair_keeps_a_whole_last_row_lacking_only_its_newline(tmp_path):
+    path = _three_rows(tmp_path)
+    text = path.read_text()
+    path.write_text(text[:-1])                         # the newline of the last row lost (was: row deleted, refitted)
+    assert len(batch.load_results(tmp_path)) == 3
+    assert batch.repair(path) == 0 and path.read_text() == text
+    path.write_text(text[:-3])                         # cut inside the last field (the Python version): removed
+    assert batch.repair(path) == len(text.splitlines()[-1]) - 2 and path.read_text().count("\n") == 3
+    s = batch.fit_batch(TARGETS, ["lambertian"], ["l2-cos"], tmp_path, workers=0, starts=1)
+    assert (s.skipped, s.done) == (2, 1)
+
+
+def test_a_duplicated_row_is_reported_and_dropped(tmp_path):
+    path = _three_rows(tmp_path)
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines) + lines[2])        # the second fit's row twice
+    problems = []
+    rows = batch.load_results(tmp_path, problems)
+    assert sorted(r["target"] for r in rows) == TARGETS
+    assert problems == [f"{path}:5: a second row of {TARGETS[1]} / l2-cos (the first at line 3); dropped"]
+
+
+def test_a_retry_replaces_the_failed_row(tmp_path):
+    args = (["/no/such/file.csv"], ["lambertian"], ["l2-cos"], tmp_path)
+    batch.fit_batch(*args, workers=0)
+    batch.fit_batch(*args, workers=0, retry_failed=True)
+    problems = []
+    assert len(batch.load_results(tmp_path, problems)) == 1 and problems == []
+
+
+def test_fit_batch_on_a_dask_scheduler_gives_the_rows_of_one_process(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    targets = ["lambertian:rd=0.6", "modified-phong:kd=0.3:ks=0.4:n=30"]
+    ref = batch.fit_batch(targets, ["lambertian"], ["l2-cos"], tmp_path / "one", workers=0, starts=1, seed=2)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as c:
+        s = batch.fit_batch(targets, ["lambertian"], ["l2-cos"], tmp_path / "dask", scheduler=c.scheduler_address,
+                            starts=1, seed=2)
+    assert (ref.done, s.done, s.workers) == (2, 2, 2)
+    got = {r["target"]: r["params"]["rd"] for r in batch.load_results(tmp_path / "dask")}
+    assert got == {r["target"]: r["params"]["rd"] for r in batch.load_results(tmp_path / "one")}

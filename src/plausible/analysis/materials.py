@@ -26,8 +26,9 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields as dataclass_fields
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +37,7 @@ from ..arrays import backend
 from ..arrays.ops import NP
 from ..catalogue import fit_set, fits as all_fits, material, materials
 from ..integrals.albedo import TOL as ALBEDO_TOL, AlbedoResult, albedos, direction
+from ..progress import silent
 from ..text import write_atomic
 from .checks import reciprocity
 
@@ -176,38 +178,99 @@ def work_list(fits=None, names=None) -> list[tuple]:
     return out
 
 
-def _check_chunk(chunk, thetas_deg, quick, albedo_tol=None):
-    return [check_fit(name, key, thetas_deg, quick, albedo_tol) for name, key in chunk]
+def _check_task(task, thetas_deg, quick, albedo_tol=None):
+    name, key = task
+    return check_fit(name, key, thetas_deg, quick, albedo_tol)
 
 
 def check_fits(fits=None, names=None, *, thetas_deg=THETAS_DEG, progress=None, quick: bool = False,
-               jobs: int = 1, albedo_tol=None) -> list[FitCheck]:
+               jobs: int = 1, albedo_tol=None, scheduler: str | None = None, journal=None,
+               summary: list | None = None) -> list[FitCheck]:
     """:func:`check_fit` of every material (or ``names``) of every loadable fit
-    set (or ``fits``; see :func:`work_list`; ``albedo_tol`` as in :func:`check_model`).  ``progress``, if given, is called
-    with no argument after each fit.  ``jobs`` > 1: that many worker processes,
-    each checking runs of consecutive fits of one set (they share one compiled
-    kernel per model structure); the rows come back in the same order."""
-    work = work_list(fits, names)
-    if jobs <= 1 or len(work) < 2:
-        rows = []
-        for name, key in work:
-            rows.append(check_fit(name, key, thetas_deg, quick, albedo_tol))
-            if progress:
-                progress()
-        return rows
-    from concurrent.futures import ProcessPoolExecutor
+    set (or ``fits``; see :func:`work_list`; ``albedo_tol`` as in :func:`check_model`), in
+    table order.  ``progress``, if given, is called with no argument after each fit.
 
-    size = max(1, min(16, len(work) // (4 * jobs)))
-    chunks = [work[s:s + size] for s in range(0, len(work), size)]
-    rows = []
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for got in pool.map(_check_chunk, chunks, [thetas_deg] * len(chunks), [quick] * len(chunks),
-                            [albedo_tol] * len(chunks)):
-            rows.extend(got)
-            if progress:
-                for _ in got:
-                    progress()
-    return rows
+    The batch engine (:func:`plausible.engine.run`) runs them: ``jobs`` > 1, that many
+    spawned worker processes (each keeps its compiled kernels from fit to fit; a dead one
+    is replaced and its fit checked once more); ``scheduler``, a running Dask scheduler's
+    address instead.  ``journal``: a JSON Lines file where each row is appended as it
+    finishes (:func:`read_journal`); rows already there with the same settings are not
+    checked again (resume after an interrupt), and each fit is claimed (``.FILE.claims``
+    beside it) so that runs sharing the journal share the work.  Rows another run holds
+    are missing from the list returned then (compare with :func:`work_list`).
+    ``summary``: the engine's :class:`~plausible.engine.RunSummary` is appended to it."""
+    from functools import partial
+
+    from .. import engine
+
+    work = work_list(fits, names)
+    settings = _settings(thetas_deg, quick, albedo_tol)
+    got = read_journal(journal, settings) if journal is not None else {}
+
+    def record(task, row):
+        if journal is not None:
+            try:
+                engine.append_line(journal, json.dumps(dict(row.to_dict(), settings=settings)))
+            except OSError as e:
+                raise engine.BatchWriteError(f"cannot write {str(journal)!r} ({e.strerror or e}): the rows "
+                                             "checked so far are kept there; free space or fix the permissions and "
+                                             "run the same command again to resume") from None
+        got[task] = row
+
+    claims = None if journal is None else engine.Claims.beside(journal, "check")
+    s = engine.run([t for t in work if t not in got], partial(_check_task, thetas_deg=thetas_deg, quick=quick,
+                                                             albedo_tol=albedo_tol),
+                   record, key=lambda t: json.dumps([t, settings]), claims=claims,
+                   done=None if journal is None else lambda t: t in got or t in read_journal(journal, settings),
+                   scheduler=scheduler, workers=jobs if jobs > 1 else 0, label="fits", progress=_factory(progress))
+    if summary is not None:
+        summary.append(s)
+    if journal is not None:
+        got.update(read_journal(journal, settings))
+    return [got[t] for t in work if t in got]
+
+
+def _factory(progress):
+    """A :mod:`plausible.progress` factory whose ticks call ``progress()`` (None: silent)."""
+    if progress is None:
+        return silent
+
+    def factory(total, label=""):
+        def tick(n=1):
+            for _ in range(n):
+                progress()
+        return tick
+
+    return factory
+
+
+def _settings(thetas_deg, quick, albedo_tol) -> dict:
+    """What a journal's row was computed with (a row of other settings is not reused)."""
+    from .. import __version__
+
+    return dict(thetas_deg=[float(t) for t in thetas_deg], quick=bool(quick),
+                albedo_tol=None if albedo_tol is None else float(albedo_tol), version=__version__)
+
+
+def read_journal(path, settings: dict | None = None) -> dict:
+    """``{(material, fit): FitCheck}`` of the rows of a :func:`check_fits` journal (those
+    computed with ``settings``, when given); a line cut by an interrupt is skipped."""
+    out = {}
+    try:
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+    except FileNotFoundError:
+        return out
+    fields = {f.name for f in dataclass_fields(FitCheck)}
+    for line in text.split("\n"):
+        try:
+            d = json.loads(line)
+            if settings is not None and d.get("settings") != settings:
+                continue
+            row = FitCheck(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in d.items() if k in fields})
+        except (ValueError, TypeError, AttributeError):
+            continue
+        out[(row.material, row.fit)] = row
+    return out
 
 
 def summary(rows) -> list[dict]:
@@ -281,4 +344,4 @@ def write_tables(rows, out) -> list[Path]:
 
 __all__ = ["FitCheck", "QUICK_TOL", "THETAS", "THETAS_DEG", "albedo_curve_of_sum", "check_fit", "check_fits",
            "closed_form_albedo",
-           "check_model", "markdown", "summary", "work_list", "write_tables"]
+           "check_model", "markdown", "read_journal", "summary", "work_list", "write_tables"]

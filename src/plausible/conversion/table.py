@@ -5,7 +5,10 @@ Each row is :func:`plausible.convert` of ``material:NAME@FIT`` to one target
 albedo difference at 0, 45 and 75 degrees (the target's by its own sampler).
 :func:`run_table` appends each row to a JSON Lines file as soon as it finishes
 (one line, flushed), so an interrupted run loses at most the conversions in
-flight, and a second run skips every row already there::
+flight, and a second run skips every row already there.  The batch engine
+(:mod:`plausible.engine`, shared with ``fit-batch`` and ``check --materials``) claims
+each conversion, so that two runs on one file share the work and write each row once,
+and runs them here, in worker processes or on a Dask scheduler::
 
     plausible convert-table --out docs/convert-table.jsonl --workers 1     # resumes
     plausible convert-table --out docs/convert-table.jsonl --markdown docs/convert-table.md --limit 0
@@ -18,7 +21,6 @@ covers every fit set alike.
 from __future__ import annotations
 
 import json
-import os
 import time
 from functools import lru_cache
 from pathlib import Path
@@ -91,59 +93,107 @@ def convert_row(job) -> dict:
                 params=c.params, seconds=time.monotonic() - t0, code=code_version())
 
 
-def read_rows(path) -> dict:
+def read_rows(path, problems: list | None = None) -> dict:
     """``{key: row}`` of a table file (a JSON Lines file; a line cut by an interrupt, the
-    last one, is ignored; a later row of a key replaces an earlier one)."""
-    p = Path(path)
-    out = {}
-    if not p.exists():
-        return out
-    for line in p.read_text().splitlines():
+    last one, is ignored; a later row of a key made by other code replaces an earlier one:
+    ``--redo``).  A second row of a key made by the same code is a duplicate: dropped, and
+    reported in ``problems`` (if given) as ``file:line: reason``."""
+    return _Rows(path).update(problems)
+
+
+class _Rows:
+    """The rows of a table file, read incrementally (each :meth:`update` reads only the
+    whole lines appended since the last), so a run can ask after each claim whether another
+    run wrote the row meanwhile."""
+
+    def __init__(self, path):
+        self.path, self.offset, self.line, self.open = Path(path), 0, 0, False
+        self.rows, self.lines = {}, {}
+
+    def update(self, problems: list | None = None) -> dict:
         try:
-            r = json.loads(line)
-        except ValueError:
-            continue
-        if isinstance(r, dict) and {"to", "fit", "material"} <= r.keys():
-            out[key(r)] = r
-    return out
+            with open(self.path, "rb") as f:
+                f.seek(self.offset)
+                data = f.read()
+        except FileNotFoundError:
+            return self.rows
+        end = data.rfind(b"\n") + 1
+        if end < len(data) and _row(data[end:]) is not None:
+            end = len(data)            # a whole last row lacking only its newline
+        skip = int(self.open and data.startswith(b"\n"))     # the newline that ends that row
+        chunk = data[skip:end].decode("utf-8", errors="replace")
+        self.offset += end
+        if end:
+            self.open = not data[:end].endswith(b"\n")
+        lines = chunk.split("\n") if chunk else []
+        if lines and lines[-1] == "":
+            lines.pop()
+        for text in lines:
+            self.line += 1
+            r = _row(text.encode())
+            if r is None:
+                continue
+            k = key(r)
+            if k in self.rows and self.rows[k].get("code") == r.get("code"):
+                if problems is not None:
+                    problems.append(f"{self.path}:{self.line}: a second row of {k} (the first at line "
+                                    f"{self.lines[k]}); dropped")
+                continue
+            self.rows[k], self.lines[k] = r, self.line
+        return self.rows
 
 
-def _append(path, row):
-    """One line for ``row``, after a newline if an interrupt left the last line unfinished."""
-    p = Path(path)
-    cut = False
-    if p.exists() and p.stat().st_size:
-        with open(p, "rb") as f:
-            f.seek(-1, os.SEEK_END)
-            cut = f.read(1) != b"\n"
-    with open(p, "a") as f:
-        f.write(("\n" if cut else "") + json.dumps(row) + "\n")
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def _guarded(job):
+def _row(line: bytes):
     try:
-        return convert_row(job)
+        r = json.loads(line)
+    except ValueError:
+        return None
+    return r if isinstance(r, dict) and {"to", "fit", "material"} <= r.keys() else None
+
+
+def _guarded(job, row=None):
+    """``row(job)`` (default :func:`convert_row`), or a row with the error when it raises."""
+    try:
+        return (row or convert_row)(job)
     except Exception as e:      # a row that fails is recorded, not fatal to the run
-        to, fit, name = job
-        return dict(to=to, fit=fit, material=name, error=f"{type(e).__name__}: {e}")
+        return _error_row(job, e)
+
+
+def _error_row(job, e) -> dict:
+    to, fit, name = job
+    return dict(to=to, fit=fit, material=name, error=f"{type(e).__name__}: {e}")
 
 
 def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, limit: int | None = None,
-              workers: int = 0, on_row=None, redo=()) -> dict:
+              workers: int = 0, on_row=None, redo=(), scheduler: str | None = None, row=None,
+              problems: list | None = None, summary: list | None = None) -> dict:
     """Convert the :func:`jobs` not yet in ``path`` and append each row as it finishes.
 
-    ``workers``: 0 runs them one after another in this process; ``n >= 1`` in ``n``
-    worker processes.  ``limit``: at most this many conversions this run.
+    The batch engine (:func:`plausible.engine.run`) runs them: ``workers``: 0 one after
+    another in this process; ``n >= 1`` in ``n`` spawned worker processes (a dead one is
+    replaced and its conversion tried once more, then recorded as failed);
+    ``scheduler``: the address of a running Dask scheduler instead.  Each conversion is
+    claimed (``.FILE.claims`` beside ``path``) just before it starts and the file re-read
+    for it, so that runs sharing the file share the work and write each row once.
+    ``limit``: at most this many conversions this run.
     ``redo``: targets (``"mitsuba:diffuse"``, ...), fit sets (``"ngan2005/ward"``) or materials
     (``"material:NAME@FIT"``) whose rows made by other code than this (:func:`code_version`) are
     converted again first, in the order of :func:`jobs` (the new row replaces the old one).
-    ``on_row(row)`` is called after each row is written.  Returns every row of ``path``."""
+    ``row(job)``: the row of a job (default :func:`convert_row`; with workers or a scheduler,
+    a module-level function).  ``on_row(row)`` is called after each row is written.
+    ``problems``: duplicated rows are listed here (:func:`read_rows`); ``summary``: the
+    engine's :class:`~plausible.engine.RunSummary` is appended to it.  Returns every row of
+    ``path``."""
+    from functools import partial
+
+    from .. import engine
+
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
-    done = read_rows(path)
+    seen = _Rows(path)
+    done = seen.update(problems)
     redo = set(redo)
+
     def wanted(j):
         r = done[key(j)]
         return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
@@ -153,24 +203,43 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
     todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
     if limit is not None:
         todo = todo[:max(0, int(limit))]
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    stored = []
 
-    def finish(row):
-        _append(path, row)
+    def record(job, r):
+        try:
+            engine.append_line(path, json.dumps(r))
+        except OSError as e:
+            raise engine.BatchWriteError(f"cannot write {str(path)!r} ({e.strerror or e}): {len(stored)} rows of "
+                                         "this run are stored; free space or fix the permissions and run the "
+                                         "same command again to resume") from None
+        stored.append(key(r))
         if on_row is not None:
-            on_row(row)
+            on_row(r)
 
-    if workers == 0 or len(todo) <= 1:
-        for j in todo:
-            finish(_guarded(j))
-    else:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
+    def written(job):
+        r = seen.update().get(key(job))
+        return r is not None and (job not in again or r.get("code") == code_version())
 
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            futs = [ex.submit(_guarded, j) for j in todo]
-            for f in as_completed(futs):
-                finish(f.result())
+    s = engine.run(todo, partial(_guarded, row=row) if row else _guarded, record, key=key, claims=_claims(path),
+                   done=written, failed=_error_row, scheduler=scheduler, workers=workers, label="conversions")
+    if summary is not None:
+        summary.append(s)
     return read_rows(path)
+
+
+def _claims(path):
+    """The claims of a table file: the folder ``.FILE.claims`` beside it (made now, so an
+    unwritable place fails before any work)."""
+    from .. import engine
+
+    p = Path(path)
+    claims = engine.Claims.beside(p, "convert")
+    try:
+        claims.folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise engine.BatchWriteError(f"cannot write beside {str(p)!r} ({e.strerror or e}); nothing was "
+                                     "converted") from None
+    return claims
 
 
 def markdown(rows: dict, tolerance: float | None = None) -> str:

@@ -6,15 +6,17 @@ with the batch's seed, starts and time limit).  Ngan, Durand & Matusik (EGSR 200
 fitted 7 models to 100 materials; with three metrics that is 2,100 fits of
 seconds to minutes each, which outgrows one laptop.  The work is mapped with
 Dask's ``distributed`` (the same code runs on local processes or on a cluster);
-this module only decides *what* to run and *where the answers go*:
+this module only decides *what* to run and *where the answers go*, and the batch
+engine :mod:`plausible.engine` (shared with ``convert-table`` and ``check --materials``)
+claims, runs and records:
 
 1. :func:`plan` expands targets x models x metrics into :class:`FitTask` objects
    and drops those already in the results folder (resume).
-2. :func:`fit_batch` submits the rest to a Dask client (a ``LocalCluster`` of
-   one single-threaded worker process per core by default, or ``scheduler=``
-   the address of a running scheduler) and appends one row per finished fit to
-   the folder's table.  A fit that raises is recorded with its error and does
-   not stop the batch; a worker that dies has its tasks rerun by Dask.
+2. :func:`fit_batch` runs the rest (local worker processes, one per usable core by
+   default, or ``scheduler=`` the address of a running Dask scheduler) and appends
+   one row per finished fit to the folder's table.  A fit that raises is recorded
+   with its error and does not stop the batch; a worker that dies has its fit tried
+   once more (Dask: rerun by Dask), then recorded as failed.
 3. :func:`load_results` reads the table back (parameters and errors as Python
    values), for :func:`plausible.fitting.batch_report.write_report` or your own use.
 
@@ -22,8 +24,9 @@ The table, ``OUT/fits/<model>.csv`` (one file per model, so that every fitted
 parameter is a column), is append-only: each row is written with one ``write``
 on a file opened for appending, then flushed to disk.  An interrupted run
 (Ctrl-C, a killed process) loses at most the fits in flight; a row cut short
-by a crash mid-write is removed (:func:`repair`) before anything else is
-appended.  Columns: ``target, model, metric, status`` (``ok`` or ``failed``),
+by a crash mid-write is removed (:func:`repair`; a whole last row lacking only its
+newline is kept) before anything else is appended, and a second row of a fit is
+reported and dropped.  Columns: ``target, model, metric, status`` (``ok`` or ``failed``),
 one column per parameter of the model (colours as JSON lists), one per error
 figure of :func:`plausible.fitting.metrics.errors` (``err_l2-cos`` ...),
 ``seconds, evaluations, timed_out, seed, starts, time_limit, error`` (the
@@ -34,22 +37,19 @@ and Python that computed the row.
 from __future__ import annotations
 
 import csv
-import fcntl
-import hashlib
 import io
 import json
 import math
-import os
 import platform
-import socket
+import re
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .. import registry
-from ..progress import start
+from .. import engine, registry
+from ..engine import BatchWriteError
 
 #: The error figures of every fit, in column order (``metrics.errors`` keys).
 ERROR_KEYS = ("l2-cos", "log", "fcos_max", "albedo_max", "perceptual")
@@ -91,7 +91,8 @@ def table_path(out, model: str) -> Path:
 
 
 def repair(path) -> int:
-    """Remove a last row cut short by a crash mid-write (no final newline).
+    """Remove a last row cut short by a crash mid-write (no final newline); a last row
+    that is whole and lacks only its newline (:func:`whole_last_row`) gets it instead.
     Returns the number of bytes removed."""
     path = Path(path)
     if not path.exists():
@@ -100,28 +101,43 @@ def repair(path) -> int:
     if not data or data.endswith(b"\n"):
         return 0
     keep = data.rfind(b"\n") + 1
+    if whole_last_row(path, data[keep:]):
+        with open(path, "ab") as fh:
+            fh.write(b"\n")
+        return 0
     with open(path, "r+b") as fh:
         fh.truncate(keep)
     return len(data) - keep
 
 
+#: A whole Python version (the last column): a row cut inside it does not end so.
+_VERSION = re.compile(r"\d+\.\d+\.\d+\w*")
+
+
+def whole_last_row(path, line: bytes) -> bool:
+    """Is ``line``, the last line of the table ``path`` without its newline, a whole row?
+    Yes when it reads as a row of the file's model (:func:`_read_table`'s tests) and
+    ends with a whole Python version (the last column; a row cut inside it ends with
+    ``3.11.`` or ``3.1``, and a row cut earlier lacks fields)."""
+    try:
+        header = list(columns(Path(path).stem))
+    except ValueError:
+        return False
+    text = line.decode("utf-8", errors="replace")
+    row, _ = _parse_line(text, header, Path(path).stem, "")
+    return row is not None and bool(_VERSION.fullmatch(row["python_version"] or ""))
+
+
 def append_row(path, header, row: dict) -> None:
     """Append ``row`` (a dict over ``header``) to the CSV ``path`` with one write,
-    then flush it to disk; a new or empty file gets the header first."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    then flush it to disk; a new or empty file gets the header first
+    (:func:`plausible.engine.append_line`)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)      # another run appending to the same table waits
-        if os.fstat(fd).st_size == 0:
-            w.writerow(header)
-        w.writerow([_cell(row.get(c)) for c in header])
-        os.write(fd, buf.getvalue().encode())
-        os.fsync(fd)
-    finally:
-        os.close(fd)                        # (releases the lock)
+    w.writerow(header)
+    w.writerow([_cell(row.get(c)) for c in header])
+    head, line = buf.getvalue().split("\n")[:2]
+    engine.append_line(path, line, header=head)
 
 
 def _cell(v) -> str:
@@ -156,10 +172,12 @@ def _read_table(path, problems: list):
     """The rows of one ``fits/<model>.csv`` as dicts over its columns, skipping
     (and listing in ``problems`` as ``file:line: reason``) every line that is not
     a whole row: a garbage line, extra or missing fields, an unterminated quote,
-    a status other than ok/failed, a cell that does not parse.  A header that is
-    not the model's columns is reported and the rows are read by the columns
-    (the model is the file's name).  One row is one line (:func:`append_row`
-    writes no newline inside a cell)."""
+    a status other than ok/failed, a cell that does not parse, a second row of a
+    fit whose first row is ``ok`` (a later row replaces a ``failed`` one: a retry).
+    A header that is not the model's columns is reported and the rows are read by
+    the columns (the model is the file's name).  One row is one line
+    (:func:`append_row` writes no newline inside a cell); a last line without its
+    newline is read only when whole (:func:`whole_last_row`)."""
     model = path.stem
     try:
         header = list(columns(model))
@@ -171,35 +189,44 @@ def _read_table(path, problems: list):
     lines = data.decode("utf-8", errors="replace").split("\n")
     if lines and lines[-1] == "":
         lines.pop()
-    elif lines:
+    elif lines and not whole_last_row(path, lines[-1].encode()):
         lines.pop()                     # a last row cut short by a crash (no newline)
-    out = []
+    out, first = {}, {}
     for ln, line in enumerate(lines, 1):
-        where = f"{path}:{ln}"
-        try:
-            cells = next(csv.reader([line], strict=True))
-        except (csv.Error, StopIteration) as e:
-            problems.append(f"{where}: not a CSV row ({e}); skipped")
+        if ln == 1 and line.split(",", 1)[0] == "target":
+            if next(csv.reader([line]), None) != header:
+                problems.append(f"{path}:{ln}: header is not the columns of {model!r}; rows read by those columns")
             continue
-        if ln == 1 and cells and cells[0] == "target":
-            if cells != header:
-                problems.append(f"{where}: header is not the columns of {model!r}; rows read by those columns")
+        row, problem = _parse_line(line, header, model, f"{path}:{ln}")
+        if row is None:
+            problems.append(problem)
             continue
-        if len(cells) != len(header):
-            problems.append(f"{where}: {len(cells)} fields where {model!r} has {len(header)}; skipped")
+        key = (row["target"], row["model"], row["metric"])
+        if key in out and out[key]["status"] == "ok":
+            problems.append(f"{path}:{ln}: a second row of {key[0]} / {key[2]} (the first at line {first[key]}); "
+                            "dropped")
             continue
-        r = dict(zip(header, cells))
-        if r["status"] not in ("ok", "failed") or r["model"] != model or not r["target"] or not r["metric"]:
-            problems.append(f"{where}: not a fit of {model!r} (status {r['status'][:20]!r}); skipped")
-            continue
-        try:
-            parsed = {k: (v if k in HEAD or k.endswith("_version") or k == "error" else _parse(v))
-                      for k, v in r.items()}
-        except ValueError as e:
-            problems.append(f"{where}: a cell does not parse ({e}); skipped")
-            continue
-        out.append(parsed)
-    return out
+        out.pop(key, None)              # a retry replaces the failed row
+        out[key], first[key] = row, ln
+    return list(out.values())
+
+
+def _parse_line(line: str, header: list, model: str, where: str):
+    """``(row, None)`` for a line that is a whole row of ``model``, else ``(None, reason)``."""
+    try:
+        cells = next(csv.reader([line], strict=True))
+    except (csv.Error, StopIteration) as e:
+        return None, f"{where}: not a CSV row ({e}); skipped"
+    if len(cells) != len(header):
+        return None, f"{where}: {len(cells)} fields where {model!r} has {len(header)}; skipped"
+    r = dict(zip(header, cells))
+    if r["status"] not in ("ok", "failed") or r["model"] != model or not r["target"] or not r["metric"]:
+        return None, f"{where}: not a fit of {model!r} (status {r['status'][:20]!r}); skipped"
+    try:
+        return {k: (v if k in HEAD or k.endswith("_version") or k == "error" else _parse(v))
+                for k, v in r.items()}, None
+    except ValueError as e:
+        return None, f"{where}: a cell does not parse ({e}); skipped"
 
 
 def load_results(out, problems: list | None = None) -> list[dict]:
@@ -245,21 +272,28 @@ def run_task(task: FitTask) -> dict:
     bad target cannot stop a batch).  Runs on a worker."""
     from .fit import fit
 
-    row = dict(asdict(task))
-    row.update(_versions())
     t0 = time.monotonic()
     try:
         res = fit(task.model, task.target, task.metric, seed=task.seed, starts=task.starts,
                   time_limit=task.time_limit)
     except Exception as e:  # noqa: BLE001 - recorded in the table, the batch goes on
-        row.update(status="failed", error=f"{type(e).__name__}: {e}", seconds=time.monotonic() - t0)
-        return row
+        return failed_row(task, e, time.monotonic() - t0)
+    row = dict(asdict(task))
+    row.update(_versions())
     row.update(status="ok", seconds=res.seconds, evaluations=res.evaluations, timed_out=res.timed_out)
     for k, v in res.params.items():
         row[k] = v.tolist() if isinstance(v, np.ndarray) else (v if isinstance(v, (int, float, str)) else str(v))
     for k in ERROR_KEYS:
         v = res.errors.get(k)
         row[f"err_{k}"] = None if v is None or not math.isfinite(v) else float(v)
+    return row
+
+
+def failed_row(task: FitTask, exc, seconds=None) -> dict:
+    """The row of a fit that raised ``exc`` (or whose worker died: :class:`plausible.engine.WorkerDied`)."""
+    row = dict(asdict(task))
+    row.update(_versions())
+    row.update(status="failed", error=f"{type(exc).__name__}: {exc}", seconds=seconds)
     return row
 
 
@@ -270,54 +304,28 @@ def record(out, row: dict) -> None:
 
 # -- sharing a folder between runs --------------------------------------------------------
 
+def _claims(out) -> engine.Claims:
+    return engine.Claims(Path(out) / "fits" / ".claims", "fit")
+
+
+def _key(task: FitTask) -> str:
+    return json.dumps(list(task.key))
+
+
 def _claim_path(out, task: FitTask) -> Path:
-    digest = hashlib.sha1(json.dumps(list(task.key)).encode()).hexdigest()[:20]
-    return Path(out) / "fits" / ".claims" / f"{task.model}-{digest}"
-
-
-def _stale(path: Path) -> bool:
-    """A claim left by a run that is gone (same machine, process not alive)."""
-    try:
-        who = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return False                   # being written, or unreadable: not ours to judge
-    if who.get("host") != socket.gethostname():
-        return False
-    try:
-        os.kill(int(who.get("pid", -1)), 0)
-    except ProcessLookupError:
-        return True
-    except (PermissionError, ValueError, OverflowError):
-        return False
-    return False
+    return _claims(out).path(_key(task))
 
 
 def claim(out, task: FitTask) -> bool:
-    """Claim ``task`` for this process, atomically (a file created with ``O_EXCL``
-    in ``OUT/fits/.claims``); False when another live run holds it.  A claim left
-    by a run that died on this machine is taken over."""
-    path = _claim_path(out, task)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    for _ in range(2):
-        try:
-            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
-            if _stale(path):
-                path.unlink(missing_ok=True)
-                continue
-            return False
-        try:
-            os.write(fd, json.dumps(dict(host=socket.gethostname(), pid=os.getpid(), key=list(task.key),
-                                         time=time.time())).encode())
-        finally:
-            os.close(fd)
-        return True
-    return False
+    """Claim ``task`` for this process (:class:`plausible.engine.Claims`: atomically, in
+    ``OUT/fits/.claims``); False when another live run holds it.  A stale claim (empty,
+    of a dead process or of a PID now another process's) is taken over."""
+    return _claims(out).take(_key(task))
 
 
 def release(out, task: FitTask) -> None:
     """Give up the claim of ``task`` (after its row is written)."""
-    _claim_path(out, task).unlink(missing_ok=True)
+    _claims(out).release(_key(task))
 
 
 def _in_table(out, task: FitTask, retry_failed: bool) -> bool:
@@ -376,19 +384,10 @@ class BatchSummary:
     shared: int = 0
     #: Malformed rows of the folder's tables (``file:line: reason``), skipped and refitted.
     bad_rows: list = field(default_factory=list)
-
-
-def _client(scheduler, workers):
-    """A Dask client: to ``scheduler`` (an address) if given, else a LocalCluster of
-    ``workers`` single-threaded processes (default: every core)."""
-    from distributed import Client, LocalCluster
-
-    if scheduler:
-        return Client(scheduler), None
-    n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=40)
-    return Client(cluster), cluster
+    #: ``{claim key: owner}`` of the fits left to another live run (:func:`plausible.engine.describe`).
+    left_to: dict = field(default_factory=dict)
+    #: Stale claims taken over (``key: reason``).
+    taken_over: list = field(default_factory=list)
 
 
 def fit_batch(targets, models, metrics, out, *, scheduler: str | None = None, workers: int | None = None,
@@ -397,15 +396,19 @@ def fit_batch(targets, models, metrics, out, *, scheduler: str | None = None, wo
     """Fit every model to every target under every metric; write the rows to
     ``out`` as they finish (see the module docstring).
 
-    ``scheduler``: address of a running Dask scheduler (``tcp://host:8786``);
-    without it a ``LocalCluster`` of ``workers`` processes (default: all cores)
-    is started and closed.  ``workers=0`` runs the fits one after another in this
-    process (no Dask).  ``progress``: a :mod:`plausible.progress` factory (ticked
+    The batch engine (:func:`plausible.engine.run`) runs them: ``scheduler``, the
+    address of a running Dask scheduler (``tcp://host:8786``); without it ``workers``
+    spawned local processes (default: the usable cores; a dead one is replaced and its
+    fit tried once more, then recorded as failed), ``workers=0`` one fit after another
+    in this process.  Each fit is claimed (``OUT/fits/.claims``) just before it starts,
+    so that runs sharing the folder share the work.  ``progress``: a :mod:`plausible.progress` factory (ticked
     once per finished fit); ``on_result(row)`` is called in this
     process after each row is written.  Fits already in ``out`` are skipped
     (failed ones too, unless ``retry_failed``).  On ``KeyboardInterrupt`` the
     fits in flight are cancelled, what finished is kept, and the interrupt is
-    re-raised after the cluster is closed.
+    re-raised after the workers are closed.  :class:`BatchWriteError` when the folder
+    (table or claims) cannot be written; :class:`plausible.engine.SchedulerError` when
+    the scheduler cannot be reached.
     """
     out = Path(out)
     try:
@@ -420,26 +423,8 @@ def fit_batch(targets, models, metrics, out, *, scheduler: str | None = None, wo
     tasks = plan(targets, models, metrics, out=out, seed=seed, starts=starts, time_limit=time_limit,
                  retry_failed=retry_failed, problems=bad)
     summary = BatchSummary(len(all_tasks), len(all_tasks) - len(tasks), 0, 0, 0.0, 0, bad_rows=bad)
-    t0 = time.monotonic()
-    held = set()
 
-    def take(task):
-        """Claim ``task``, unless another run holds it or has written it meanwhile."""
-        if not claim(out, task):
-            summary.shared += 1
-            tick()
-            return False
-        held.add(task)
-        if _in_table(out, task, retry_failed):
-            release(out, task)
-            held.discard(task)
-            summary.shared += 1
-            tick()
-            return False
-        return True
-
-    def finish(row):
-        task = FitTask(row["target"], row["model"], row["metric"], row["seed"], row["starts"], row["time_limit"])
+    def write(task, row):
         try:
             record(out, row)
         except OSError as e:
@@ -447,73 +432,23 @@ def fit_batch(targets, models, metrics, out, *, scheduler: str | None = None, wo
                 f"fit_batch: cannot write {str(table_path(out, row['model']))!r} ({e.strerror or e}): "
                 f"{summary.done} fits of this run are stored, none was lost in the table; free space or "
                 f"fix the folder's permissions and run the same command again to resume") from None
-        release(out, task)
-        held.discard(task)
         summary.done += 1
         summary.failed += row["status"] != "ok"
         if on_result:
             on_result(row)
-        tick()
 
-    tick = start(progress, len(tasks), "fits")
+    if workers is None:
+        from ..analysis.suite import usable_cores
+
+        workers = usable_cores()
+    claims = _claims(out)
     try:
-        if tasks and workers == 0 and not scheduler:
-            summary.workers = 1
-            for t in tasks:
-                if take(t):
-                    finish(run_task(t))
-        elif tasks:
-            _run_dask(tasks, scheduler, workers, summary, finish, take)
+        s = engine.run(tasks, run_task, write, key=_key, claims=claims, done=lambda t: _in_table(out, t, retry_failed),
+                       failed=failed_row, scheduler=scheduler, workers=workers, progress=progress, label="fits")
     finally:
-        for t in list(held):        # claims of fits not finished (interrupted, failed to write)
-            release(out, t)
-    summary.seconds = time.monotonic() - t0
+        summary.left_to, summary.taken_over = dict(claims.left_to), list(claims.taken_over)
+    summary.shared, summary.seconds, summary.workers, summary.dashboard = s.shared, s.seconds, s.workers, s.dashboard
     return summary
-
-
-class BatchWriteError(ValueError):
-    """The results folder cannot be written (read-only, disk full): the message says
-    what is stored and how to resume."""
-
-
-def _run_dask(tasks, scheduler, workers, summary, finish, take):
-    """Run ``tasks`` on Dask, claiming each (``take``) just before it is submitted and
-    keeping about two per worker in flight, so that runs sharing a folder share
-    the work."""
-    from distributed import as_completed
-
-    client, cluster = _client(scheduler, workers)
-    try:
-        summary.workers = len(client.scheduler_info().get("workers", {}))
-        summary.dashboard = client.dashboard_link if scheduler else None
-        queue = iter(tasks)
-        done = as_completed()
-        futures = []
-
-        def submit_next():
-            for t in queue:
-                if take(t):
-                    fut = client.submit(run_task, t, pure=False, key=f"fit-{os.getpid()}-{len(futures)}")
-                    futures.append(fut)
-                    done.add(fut)
-                    return True
-            return False
-
-        for _ in range(max(2 * summary.workers, 2)):
-            if not submit_next():
-                break
-        try:
-            for fut in done:
-                finish(fut.result())
-                submit_next()
-        except KeyboardInterrupt:
-            summary.interrupted = True
-            client.cancel(futures)
-            raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def scaling(per_fit_seconds: float, fits: int, workers: int, overhead: float = 0.0) -> float:
@@ -525,5 +460,6 @@ def scaling(per_fit_seconds: float, fits: int, workers: int, overhead: float = 0
     return math.ceil(fits / workers) * per_fit_seconds + overhead
 
 
-__all__ = ["BatchSummary", "BatchWriteError", "FitTask", "append_row", "claim", "columns", "done_keys", "fit_batch",
-           "load_results", "plan", "record", "release", "repair", "run_task", "scaling", "table_path"]
+__all__ = ["BatchSummary", "BatchWriteError", "FitTask", "append_row", "claim", "columns", "done_keys", "failed_row",
+           "fit_batch", "load_results", "plan", "record", "release", "repair", "run_task", "scaling", "table_path",
+           "whole_last_row"]
