@@ -30,7 +30,7 @@ from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
 from .keys import exact_text
-from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
+from .quadrature import half_vector_breaks, half_vector_level, half_vector_lune, half_vector_tmax, panel_rule
 
 
 @dataclass(frozen=True)
@@ -103,6 +103,8 @@ class _Rules:
         self.model, self.wi, self.levels, self.axes = model, wi, levels, axes
         cut = getattr(model, "mirror_cut", None)
         self.lune = bool(cut()) if callable(cut) else False
+        kink = getattr(model, "level_kink", None)
+        self.kink = bool(kink()) if callable(kink) else False
         self._breaks = {}
         self._nodes = {}
         self.sums = {}
@@ -124,12 +126,22 @@ class _Rules:
         s, ws = panel_rule(sb, m)
         p, wp = panel_rule(pb, m)
         tmax = half_vector_tmax(self.wi, p)
-        if not self.lune:
+        cuts = []
+        if self.lune:
+            cuts.append(half_vector_lune(self.wi, p))
+        if self.kink:
+            cuts.append(half_vector_level(self.wi, p))
+        if not cuts:
             return s, ws, p, wp, np.zeros_like(p), tmax
-        t1 = np.minimum(half_vector_lune(self.wi, p), tmax)
-        out = tmax > t1 * (1.0 + 1e-15)
-        return (s, ws, np.concatenate([p, p[out]]), np.concatenate([wp, wp[out]]),
-                np.concatenate([np.zeros_like(p), t1[out]]), np.concatenate([t1, tmax[out] - t1[out]]))
+        edges = np.sort(np.vstack([np.zeros_like(p)] + [np.minimum(c, tmax) for c in cuts] + [tmax]), axis=0)
+        cols = [np.ones(len(p), dtype=bool)]        # every azimuth's first segment, then the others
+        for lo_, hi_ in zip(edges[1:-1], edges[2:]):
+            cols.append(hi_ > lo_ * (1.0 + 1e-15))
+        t0 = [edges[0]] + [lo_[c] for lo_, c in zip(edges[1:-1], cols[1:])]
+        first_end = edges[1]
+        span = [first_end] + [(hi_ - lo_)[c] for lo_, hi_, c in zip(edges[1:-1], edges[2:], cols[1:])]
+        return (s, ws, np.concatenate([p[c] for c in cols]), np.concatenate([wp[c] for c in cols]),
+                np.concatenate(t0), np.concatenate(span))
 
     def shared(self, m, refine):
         """Which nodes the rules ``(m, refine)`` and ``(m, 2 refine)`` share: ``(s1, c1, s2,
