@@ -565,6 +565,8 @@ def _print_report(rep):
     console.print(t)
     for n in rep.notes:
         console.print(f"note: {escape(n)}")
+    if rep.reach:
+        console.print(f"reach: {escape(rep.reach['text'])}", soft_wrap=True)
 
 
 @main.command()

@@ -392,6 +392,52 @@ def _integrate(model, kind, wis, tol, levels):
     return values, errors
 
 
+def quadrature_reach(model, wi, *, levels: int = 13, probes: int = 10_000, axes: bool | None = None) -> float:
+    """What :func:`albedo` at ``wi`` cannot see: the largest angle (radians) between an
+    outgoing direction of the upper hemisphere and the nearest node of the finest rule of
+    the first refinement step (order 6 on the twice finer floor, the half-vector frame graded
+    toward the mirror direction, the horizon, the model's ``peak_directions`` and, where
+    ``axes``, the tangent axes; the extra panel edges of a lune or a kink, which only add
+    nodes, left out).  A lobe narrower than this, centred in such a gap and away from every
+    hint, adds next to nothing to the first step's sums, so its bound stays small and the
+    integration stops there: the lobe is missed.
+
+    Measured on ``probes`` directions of a Fibonacci lattice, and returned plus the lattice's
+    spacing ``sqrt(2 pi / probes)`` (0.025 rad by default; every direction lies within it of
+    a probe, so the sum bounds the gap from above): each probe's half vector is placed in the tensor rule (``s`` and
+    ``phi`` node arrays, by bisection) and its distance to the 3 x 3 nodes around it taken in
+    ``wo`` (3 x 4: the map from ``h`` to ``wo`` is not linear).  ``axes`` defaults to :func:`is_isotropic`'s answer."""
+    wi = _unit_incidence(wi)
+    if wi[2] <= 0:
+        return math.pi
+    rules = _Rules(model, wi, levels, (not is_isotropic(model)) if axes is None else axes)
+    rules.lune = rules.kink = False
+    s, _, p, _, _, tmax = rules.nodes(ORDERS[1], 2)
+    k = np.arange(probes) + 0.5
+    z = 1.0 - k / probes                       # a Fibonacci lattice on the upper hemisphere
+    a = k * math.pi * (3.0 - math.sqrt(5.0))
+    q = np.stack([np.sqrt(1 - z * z) * np.cos(a), np.sqrt(1 - z * z) * np.sin(a), z], axis=-1)
+    h = q + wi
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    lo = p[0] - 0.5 * (p[0] + 2 * math.pi - p[-1])     # the azimuth range of the rule, periodic
+    ph = lo + (np.arctan2(h[:, 1], h[:, 0]) - lo) % (2 * math.pi)
+    th = np.arccos(np.clip(h[:, 2], -1.0, 1.0))
+    j = np.searchsorted(p, ph)[:, None] + np.arange(-2, 1)[None, :]
+    j = j % len(p)
+    sq = th[:, None] / tmax[j]
+    best = np.full(probes, np.inf)
+    for c in range(j.shape[1]):
+        ii = np.searchsorted(s, sq[:, c])
+        for di in (-2, -1, 0, 1):
+            n = np.clip(ii + di, 0, len(s) - 1)
+            t = s[n] * tmax[j[:, c]]
+            pc = p[j[:, c]]
+            hn = np.stack([np.sin(t) * np.cos(pc), np.sin(t) * np.sin(pc), np.cos(t)], axis=-1)
+            wo = 2.0 * (hn @ wi)[:, None] * hn - wi
+            best = np.minimum(best, np.arccos(np.clip(np.sum(wo * q, axis=-1), -1.0, 1.0)))
+    return float(np.max(best)) + math.sqrt(2.0 * math.pi / probes)
+
+
 def _unit_incidence(wi):
     if np.ndim(wi) == 0 and isinstance(wi, (int, float, np.number)):
         raise ValueError(f"wi must be a direction (x, y, z), got the number {wi!r}; for an incidence "
