@@ -29,3 +29,24 @@ def random_upper(rng, n, zmin=0.0, zmax=1.0):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture
+def disk_full_at(monkeypatch):
+    """``disk_full_at(name)``: from now on, opening a file whose path holds ``name`` through
+    :mod:`plausible.text`'s writers fails with ENOSPC (a disk that fills at that file)."""
+    import errno
+
+    import plausible.text
+
+    def install(name):
+        real = open
+
+        def full(path, *a, **kw):
+            if name in str(path):
+                raise OSError(errno.ENOSPC, "No space left on device")
+            return real(path, *a, **kw)
+
+        monkeypatch.setattr(plausible.text, "open", full, raising=False)
+
+    return install

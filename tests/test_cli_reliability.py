@@ -90,19 +90,10 @@ def test_check_materials_out_on_a_read_only_disk_is_refused_before_the_work(read
     _refused(r, "--out", "Read-only file system")
 
 
-def test_check_materials_out_on_a_full_disk_exits_2_and_writes_neither_table(tmp_path, monkeypatch):
+def test_check_materials_out_on_a_full_disk_exits_2_and_writes_neither_table(tmp_path, disk_full_at):
     """The disk fills while the CSV is written (ENOSPC simulated there): exit 2 naming it, and
     materials-table.md is not left without its CSV."""
-    import plausible.text
-
-    real = open
-
-    def full_at_the_csv(path, *a, **kw):
-        if "materials-table.csv" in str(path):
-            raise OSError(errno.ENOSPC, "No space left on device")
-        return real(path, *a, **kw)
-
-    monkeypatch.setattr(plausible.text, "open", full_at_the_csv, raising=False)
+    disk_full_at("materials-table.csv")
     r = run("check", "--materials", "--fit", "ngan2005/ward", "--material", "alum-bronze", "--quick",
             "--out", tmp_path, "--jobs", "1")
     _refused(r, str(tmp_path / "materials-table.csv"), "No space left on device")

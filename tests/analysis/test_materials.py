@@ -103,23 +103,15 @@ def test_the_tables_are_written_whole_and_an_interrupt_leaves_the_docs_as_they_w
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
-def test_a_full_disk_at_the_csv_leaves_neither_table(row, tmp_path, monkeypatch):
+def test_a_full_disk_at_the_csv_leaves_neither_table(row, tmp_path, disk_full_at):
     """Issue 45: the table and its CSV are written all or none; a disk that fills while
     the CSV is written (ENOSPC, simulated) leaves the old files as they were and no
     table without its CSV, and the error names the file asked for."""
     import errno
 
-    import plausible.text
     from plausible.analysis.materials import write_tables
 
-    real = open
-
-    def full_at_the_csv(path, *a, **kw):
-        if "materials-table.csv" in str(path):
-            raise OSError(errno.ENOSPC, "No space left on device")
-        return real(path, *a, **kw)
-
-    monkeypatch.setattr(plausible.text, "open", full_at_the_csv, raising=False)
+    disk_full_at("materials-table.csv")
     with pytest.raises(OSError) as e:
         write_tables([row], tmp_path)
     assert e.value.errno == errno.ENOSPC and e.value.filename == str(tmp_path / "materials-table.csv")
