@@ -97,13 +97,13 @@ def check_new_dir(folder, what: str = "output folder") -> Path:
     folder = Path(folder)
     if folder.exists():
         if not folder.is_dir():
-            raise ValueError(f"{what}: {str(folder)!r} is a file, not a folder")
+            raise ValueError(f"{what}: cannot write into {str(folder)!r} (it is a file, not a folder)")
         return check_writable_dir(folder, what)
     parent = folder.absolute().parent
     while not parent.exists():
         parent = parent.parent
     if not parent.is_dir():
-        raise ValueError(f"{what}: cannot make the folder {str(folder)!r}: {str(parent)!r} is a file")
+        raise ValueError(f"{what}: cannot write into {str(folder)!r} ({str(parent)!r} is a file, not a folder)")
     check_writable_dir(parent, what)
     return folder
 
