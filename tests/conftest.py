@@ -58,3 +58,22 @@ def full_disk(tmp_path):
         yield SimpleNamespace(path=root, fill=fill, free=lambda: filler.unlink(missing_ok=True))
     finally:
         subprocess.run(["umount", "-l", str(root)], capture_output=True)
+
+def disk_full_at(monkeypatch):
+    """``disk_full_at(name)``: from now on, opening a file whose path holds ``name`` through
+    :mod:`plausible.text`'s writers fails with ENOSPC (a disk that fills at that file)."""
+    import errno
+
+    import plausible.text
+
+    def install(name):
+        real = open
+
+        def full(path, *a, **kw):
+            if name in str(path):
+                raise OSError(errno.ENOSPC, "No space left on device")
+            return real(path, *a, **kw)
+
+        monkeypatch.setattr(plausible.text, "open", full, raising=False)
+
+    return install

@@ -242,3 +242,46 @@ def as_specular_albedo_at_normal(nu, nv, rs):
     pts = [x for x in (1e-4, 1e-3, 1e-2, 0.1) if x < math.pi / 4]
     val = integrate.quad(g, 0.0, math.pi / 4, points=pts, limit=500, epsabs=0, epsrel=1e-11)[0]
     return math.sqrt((nu + 1) * (nv + 1)) / (8 * math.pi) * 4 * 2 * math.pi * val
+
+
+def as_specular_albedo(nu, nv, wi):
+    """Directional albedo of the Ashikhmin-Shirley specular term with ``rs = 1`` (Schlick's
+    factor exactly 1) at any incidence ``wi``, from the closed form alone (no model code):
+    ``a = int p_h(h) min(1, wo_z / wi_z) d omega_h`` over the half vectors whose mirror image
+    ``wo`` of ``wi`` lies above the horizon (``f cos_o d omega_o = p_h / (4 (k.h) max(ci, co))
+    co 4 (k.h) d omega_h``), ``p_h = sqrt((nu+1)(nv+1)) / (2 pi) cos(t)^(nu cos^2 phi + nv sin^2 phi)``.
+
+    Nested adaptive Gauss-Kronrod (SciPy ``quad``): for each azimuth ``phi`` of ``h`` the polar
+    angle ``t`` runs to the horizon ``pi/4 + delta/2`` with the kink of ``min`` at ``t = delta``
+    (``wo_z = R cos(2t - delta)``, ``delta = atan2(sin(theta_i) cos(phi - phi_i), cos(theta_i))``)
+    and the lobe's width ``1/sqrt(e)`` as break points; the azimuths are split at the tangent
+    axes, the plane of incidence and its normal, each with points 1e-6 to 0.1 away.  Agrees with
+    the exact values of issue 45 (mpmath) to 1e-11 and with the other order of integration
+    (``t`` outside) to 1e-11 on the issue's cases."""
+    from scipy import integrate
+
+    wi = np.asarray(wi, dtype=np.float64) / np.linalg.norm(wi)
+    ci, si, phi_i = wi[2], math.hypot(wi[0], wi[1]), math.atan2(wi[1], wi[0])
+
+    def inner(phi):
+        e = nu * math.cos(phi) ** 2 + nv * math.sin(phi) ** 2
+        r = math.hypot(si * math.cos(phi - phi_i), ci)
+        delta = math.atan2(si * math.cos(phi - phi_i), ci)
+        tmax = 0.25 * math.pi + 0.5 * delta
+
+        def g(t):
+            return math.cos(t) ** e * math.sin(t) * min(1.0, r * math.cos(2 * t - delta) / ci)
+
+        w = 1.0 / math.sqrt(e + 1.0)
+        pts = sorted({p for p in (max(delta, 0.0), w, 3 * w, 10 * w, 30 * w) if 0 < p < tmax})
+        return integrate.quad(g, 0.0, tmax, points=pts or None, epsabs=1e-15, epsrel=1e-13, limit=1000)[0]
+
+    edges = {0.0, TWO_PI}
+    for c in (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi, phi_i, phi_i + math.pi, phi_i + 0.5 * math.pi,
+              phi_i - 0.5 * math.pi):
+        for d in (0.0, 1e-6, -1e-6, 1e-4, -1e-4, 1e-3, -1e-3, 1e-2, -1e-2, 0.1, -0.1):
+            edges.add((c + d) % TWO_PI)
+    edges = sorted(edges)
+    total = sum(integrate.quad(inner, a, b, epsabs=1e-15, epsrel=1e-13, limit=500)[0]
+                for a, b in zip(edges[:-1], edges[1:]) if b > a)
+    return math.sqrt((nu + 1) * (nv + 1)) / (2 * math.pi) * total

@@ -261,6 +261,17 @@ class BxDF:
         The default: no such cut."""
         return False
 
+    def level_kink(self) -> bool:
+        """Whether ``f cos(theta_o)`` has a kink where ``wo`` is as high as ``wi``
+        (``wo_z = wi_z``): a ``max(n.k1, n.k2)`` in a denominator (Ashikhmin-Shirley,
+        Neumann), which turns ``f cos(theta_o)`` from ``~1`` into ``~cos(theta_o) / cos(theta_i)``
+        there.  A hint for the albedo integrator of :mod:`plausible.integrals.albedo`:
+        it makes that curve a panel edge of its half-vector frame
+        (:func:`~plausible.integrals.quadrature.half_vector_level`); inside a panel
+        the kink converges slowly and hides from the error estimate (3e-6 errors
+        under a 3e-8 bound, issue 45).  The default: no such kink."""
+        return False
+
     # -- parameters as kernel data (plausible.kernel_params) ------------------------
     def _kernel_view(self, convert):
         """A shallow copy whose data parameters (the floats and channel arrays of
@@ -594,6 +605,9 @@ class OfBase(BxDF):
 
     def mirror_cut(self):
         return self.base.mirror_cut()
+
+    def level_kink(self):
+        return self.base.level_kink()
 
 
 __all__ = ["BxDF", "OfBase", "Lobe", "Params", "Sample", "Param", "above", "as_directions", "vec",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import math
 import sys
 import warnings
@@ -23,6 +24,28 @@ console = Console()
 
 def _fail(msg):
     raise click.UsageError(msg)
+
+
+def _folder_out(ctx, param, value):
+    """Callback of an ``--out`` that names a folder of files: ``-`` means standard output
+    (the README's convention), which cannot hold them, so it is refused (not made a folder
+    named ``-``)."""
+    if value == "-":
+        raise click.BadParameter("'-' means standard output, which cannot hold this command's files; "
+                                 "give a folder", param=param)
+    if value is not None and not value.strip():
+        raise click.BadParameter("an empty path; give a folder", param=param)
+    return value
+
+
+class _FiniteRange(click.FloatRange):
+    """:class:`click.FloatRange` that also refuses NaN (which every comparison lets through)."""
+
+    def convert(self, value, param, ctx):
+        v = super().convert(value, param, ctx)
+        if v is not None and math.isnan(v):
+            self.fail(f"{value!r} is not a number; give one in the range {self._describe_range()}", param, ctx)
+        return v
 
 
 def _model(name, assignments):
@@ -111,10 +134,30 @@ PARAM_OPT = click.option("-p", "--param", "params", multiple=True, metavar="NAME
 PIPE_WIDTH = 10_000
 
 
+class _SystemRefused(click.ClickException):
+    """A file or folder the command was given could not be read or written (a
+    read-only or full disk, no permission): its path and the system's reason, status 2
+    like any other bad input, no traceback."""
+
+    exit_code = 2
+
+
+def _os_error_text(e: OSError) -> str:
+    """``"cannot use PATH: REASON"`` for an :class:`OSError` (both paths of a rename)."""
+    paths = [str(p) for p in (e.filename, e.filename2) if p is not None]
+    what = " -> ".join(paths) if paths else "the output"
+    return f"cannot use {what}: {e.strerror or e}" + (
+        " (the disk is full: free some space and run the command again)" if e.errno == errno.ENOSPC else "")
+
+
 class _Group(click.Group):
     """The command group: Ctrl-C ends any command with status 130 (128 + SIGINT,
     the shell's convention; 1 means "a property fails"), after the progress
-    display is cleared."""
+    display is cleared.  An :class:`OSError` that reaches it (a file given to the
+    command that cannot be read, a folder on a read-only or full disk) ends it with
+    status 2 and one line naming the path and the reason (:class:`_SystemRefused`):
+    the one place that maps them, so no command shows a traceback for them.  A closed
+    pipe (EPIPE) is left to Click."""
 
     def invoke(self, ctx):
         try:
@@ -122,6 +165,10 @@ class _Group(click.Group):
         except KeyboardInterrupt:
             click.echo("interrupted", err=True)
             ctx.exit(130)
+        except OSError as e:
+            if e.errno == errno.EPIPE:
+                raise
+            raise _SystemRefused(_os_error_text(e)) from None
 
 
 def _version(ctx, param, value):
@@ -505,6 +552,13 @@ def _check_materials(all_materials, fit_keys, names, out_dir, where, quick, as_j
     work = M.work_list(keys, names)
     if not work:
         _fail(f"no fit set {'of ' + ', '.join(keys) + ' ' if keys else ''}has the material(s) {', '.join(names)}")
+    if out_dir:     # before the work: a folder that cannot be made or written fails now
+        from .plotting import check_new_dir
+
+        try:
+            check_new_dir(out_dir, "--out")
+        except ValueError as e:
+            _fail(str(e))
     tick = silent if as_json else _bar()
     t = tick(len(work), "checking published fits")
     rows, written = _materials_rows(M, keys, names, quick, jobs, scheduler, out_dir, t, len(work))
@@ -623,6 +677,8 @@ def _print_report(rep):
     console.print(t)
     for n in rep.notes:
         console.print(f"note: {escape(n)}")
+    if rep.reach:
+        console.print(f"reach: {escape(rep.reach['text'])}", soft_wrap=True)
 
 
 @main.command()
@@ -642,7 +698,7 @@ def albedo(models, params, plot, phi, points, as_json):
     """
     from .plotting import check_image_path, default_thetas, plot_albedo_curves
 
-    if plot:    # before the work: a path that cannot be written fails now, not after it
+    if plot is not None:    # before the work: a path that cannot be written ('' included) fails now
         try:
             check_image_path(plot, "--plot")
         except ValueError as e:
@@ -654,7 +710,7 @@ def albedo(models, params, plot, phi, points, as_json):
     if as_json:
         _echo_json([dict(model=registry.spec_of(m), phi_deg=phi, theta_deg=np.degrees(th), value=r.value,
                          error=r.error) for m, (_, _, r) in zip(targets, curves)])
-        if plot:
+        if plot is not None:
             plot_albedo_curves(curves, plot)
         return
     t = Table(title="directional albedo")
@@ -664,7 +720,7 @@ def albedo(models, params, plot, phi, points, as_json):
     for i, x in enumerate(th):
         t.add_row(f"{math.degrees(x):.2f}", *[_fmt_alb(r.value[i], r.error[i]) for _, _, r in curves])
     console.print(t)
-    if plot:
+    if plot is not None:
         plot_albedo_curves(curves, plot)
         console.print(f"wrote {escape(str(plot))}")
 
@@ -690,19 +746,20 @@ def _fmt_alb(v, e):
 @PARAM_OPT
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
-@click.option("--out", type=click.Path(file_okay=False), help="Write plane.png, albedo.png, fit.json here.")
+@click.option("--out", type=click.Path(file_okay=False), callback=_folder_out,
+              help="Write plane.png, albedo.png, fit.json here (made after the fit).")
 @click.option("--starts", type=click.IntRange(1), default=4, show_default=True, help="Optimiser starts.")
-@click.option("--time-limit", type=click.FloatRange(0), help="Stop after this many seconds (best so far).")
-@click.option("--seed", default=0, show_default=True, help="Seed of the random starts.")
+@click.option("--time-limit", type=_FiniteRange(0), help="Stop after this many seconds (best so far).")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(0), help="Seed of the random starts.")
 def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
     from .fitting import UnconstrainedWarning, fit as run_fit
     from .fitting.plots import write_plots
-    from .plotting import check_writable_dir
+    from .plotting import check_new_dir
 
     try:
-        if out:     # before the fit: a folder that cannot be written fails now, not after it
-            check_writable_dir(out, "--out", create=True)
+        if out is not None:     # before the fit: a folder that cannot be made fails now (made after it)
+            check_new_dir(out, "--out")
         with warnings.catch_warnings(record=True) as caught:     # printed below, as the command's own line
             warnings.simplefilter("always", UnconstrainedWarning)
             res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
@@ -728,7 +785,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
             console.print(f"[yellow]warning:[/yellow] {escape(str(w.message))}", soft_wrap=True)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    if out:
+    if out is not None:
         for p in write_plots(res, out):
             console.print(f"wrote {escape(str(p))}")
 
@@ -815,6 +872,14 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, schedule
     if bad:
         _fail(f"--to: the table's targets are {', '.join(table.TARGETS)}, got {', '.join(bad)}")
     fits_ = [f.strip() for f in fits.split(",") if f.strip()] if fits else None
+    from .plotting import check_writable_file
+
+    try:    # before the work (22 s of it before the first row): outputs that cannot be written fail now
+        check_writable_file(out, "--out")
+        if md is not None:
+            check_writable_file(md, "--markdown")
+    except ValueError as e:
+        _fail(str(e))
 
     def on_row(r):
         if "error" in r:
@@ -842,7 +907,7 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, schedule
     all_jobs = table.jobs(targets, per_set, fits_)
     console.print(f"{escape(out)}: {sum(table.key(j) in rows for j in all_jobs)} of {len(all_jobs)} conversions",
                   soft_wrap=True)
-    if md:
+    if md is not None:
         write_atomic(md, table.markdown(rows))
         console.print(f"wrote {escape(md)} ({len(rows)} rows)")
 
@@ -859,8 +924,9 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, schedule
 @click.option("--workers", type=click.IntRange(0), help="Local worker processes (default: all cores; 0: "
               "no Dask, one fit after another).")
 @click.option("--starts", type=click.IntRange(1), default=4, show_default=True, help="Optimiser starts per fit.")
-@click.option("--seed", default=0, show_default=True, help="Seed of the random starts (the same for every fit).")
-@click.option("--time-limit", type=click.FloatRange(0), help="Seconds per fit (best point so far).")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
+              help="Seed of the random starts (the same for every fit).")
+@click.option("--time-limit", type=_FiniteRange(0), help="Seconds per fit (best point so far).")
 @click.option("--retry-failed", is_flag=True, help="Run again the fits recorded as failed.")
 @click.option("--report", "report", type=click.Path(file_okay=False), help="Write the comparison report here.")
 @click.option("--spheres", multiple=True, metavar="TARGET",
@@ -999,7 +1065,7 @@ def explore(port, host, no_browser):
 
 
 @main.command()
-@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
+@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False), callback=_folder_out,
               help="Directory for the images, data and index.html.")
 @click.option("--only", "only", multiple=True, metavar="NAME", help="Make only this figure (repeatable).")
 @click.option("--spp", type=click.IntRange(1, 1 << 16), help="Samples per pixel of the renders (default 128).")

@@ -161,6 +161,7 @@ class Param:
                                  f"(a number is grey, 3 values RGB), got {arr.size} channels: {value!r}")
             if not np.all(np.isfinite(arr)) or np.any(arr < self.lo) or np.any(arr > self.hi):
                 raise ValueError(f"{where} must lie in {self.range_text()}, got {value!r}")
+            arr = arr + 0.0     # -0 is 0 (printed so, in the model's repr and spec)
             return float(arr) if arr.ndim == 0 else arr
         try:
             x = float(value)
@@ -173,7 +174,7 @@ class Param:
             if x != int(x):
                 raise ValueError(f"{where} must be an integer in {self.range_text()}, got {value!r}")
             return int(x)
-        return x
+        return x + 0.0      # -0 is 0 (printed so, in the model's repr and spec)
 
 
 #: Channel counts a colour parameter may have (grey, RGB).

@@ -34,8 +34,21 @@ def plot_albedo_curves(curves, path, title="Directional albedo"):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    save_figure(fig, path)
+    return path
+
+
+def save_figure(fig, path) -> Path:
+    """Save ``fig`` to ``path`` whole or not at all (:func:`plausible.text.replacing`: a
+    full disk leaves no 0-byte image) and close it; the format is ``path``'s extension."""
+    from .text import replacing
+
+    path = Path(path)
+    try:
+        with replacing(path) as (tmp,):
+            fig.savefig(tmp, format=path.suffix.lstrip(".").lower() or None)
+    finally:
+        _plt().close(fig)
     return path
 
 
@@ -43,6 +56,8 @@ def check_image_path(path, what: str = "plot") -> Path:
     """Make sure an image can be written to ``path`` before the work that makes it:
     its extension is a format matplotlib writes and its folder exists and takes
     a new file.  ValueError naming ``what``, the path and the reason otherwise."""
+    if not str(path).strip():
+        raise ValueError(f"{what}: an empty path; give an image file name (e.g. albedo.png)")
     path = Path(path)
     from matplotlib.backend_bases import FigureCanvasBase
 
@@ -74,6 +89,42 @@ def check_writable_dir(folder, what: str = "output folder", create: bool = False
     return folder
 
 
+def check_new_dir(folder, what: str = "output folder") -> Path:
+    """:func:`check_writable_dir` without making anything: ``folder`` exists and takes a
+    new file, or it does not exist yet and its nearest existing parent is a folder that
+    takes a new file (so that it can be made once the work is done).  For a command that
+    validates all its input before it creates its output folder."""
+    folder = Path(folder)
+    if folder.exists():
+        if not folder.is_dir():
+            raise ValueError(f"{what}: cannot write into {str(folder)!r} (it is a file, not a folder)")
+        return check_writable_dir(folder, what)
+    parent = folder.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ValueError(f"{what}: cannot write into {str(folder)!r} ({str(parent)!r} is a file, not a folder)")
+    check_writable_dir(parent, what)
+    return folder
+
+
+def check_writable_file(path, what: str = "output file") -> Path:
+    """ValueError naming ``what`` unless a file can be written at ``path``: not a folder,
+    its folder exists and takes a new file, and an existing file opens for appending
+    (nothing is written to it).  Before the work that makes the file."""
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{what} {str(path)!r} is a folder; give a file name")
+    check_writable_dir(path.parent, what)
+    if path.exists():
+        try:
+            with open(path, "a", encoding="utf-8"):
+                pass
+        except OSError as e:
+            raise ValueError(f"{what}: cannot write {str(path)!r} ({e.strerror or e})") from None
+    return path
+
+
 def default_thetas(n: int = 46):
     """Incidence angles (radians) from 0 to 89.9 degrees, denser toward grazing."""
     t = np.linspace(0, 1, n)
@@ -81,4 +132,5 @@ def default_thetas(n: int = 46):
     return np.radians(deg)
 
 
-__all__ = ["check_image_path", "check_writable_dir", "plot_albedo_curves", "default_thetas"]
+__all__ = ["check_image_path", "check_new_dir", "check_writable_dir", "check_writable_file", "plot_albedo_curves",
+           "default_thetas", "save_figure"]

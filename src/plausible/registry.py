@@ -92,7 +92,8 @@ def make(name: str, /, **params):
 
 
 def parse_assignments(items) -> dict:
-    """``["n=20", "ks=0.9,0.6,0.2"]`` -> ``{"n": 20.0, "ks": [0.9, 0.6, 0.2]}``."""
+    """``["n=20", "ks=0.9,0.6,0.2"]`` -> ``{"n": 20.0, "ks": [0.9, 0.6, 0.2]}``; a name
+    given twice is refused (ValueError naming it)."""
     from .params import parse_value
 
     out = {}
@@ -103,6 +104,9 @@ def parse_assignments(items) -> dict:
         if not k.strip():
             raise ValueError(f"parameter assignment {it!r} has no name before '=' (write name=value, "
                              f"e.g. n=20)")
+        if k.strip() in out:    # nu=1:nu=2 took the last value silently
+            raise ValueError(f"parameter '{k.strip()}' is given twice ({k.strip()}={out[k.strip()]!r} and "
+                             f"{it.strip()}); give each parameter once")
         try:
             out[k.strip()] = parse_value(v)
         except ValueError as e:

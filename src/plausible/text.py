@@ -11,13 +11,15 @@
   scalars (non-finite numbers become the strings ``"inf"``, ``"nan"``, which
   strict JSON readers accept).
 * :func:`write_atomic` -- a text file written whole or not at all (the output
-  files of ``convert`` and ``export``).
+  files of ``convert`` and ``export``); :func:`write_all_atomic` several, all or
+  none; :func:`replacing` the same for any writer (an image's ``savefig``).
 """
 
 from __future__ import annotations
 
 import math
 import os
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -86,24 +88,58 @@ def html_table(caption: str, header, rows) -> str:
     return f"<table><caption>{escape(str(caption))}</caption><tr>{head}</tr>{body}</table>"
 
 
-def write_atomic(path, text: str) -> None:
-    """Write ``text`` to ``path`` whole or not at all: into a temporary file beside it,
-    then renamed over it (``os.replace``, atomic on POSIX and Windows).  An error or an
-    interrupt (Ctrl-C) while writing removes the temporary file and leaves ``path`` as it
-    was (absent, or its old content): never a half-written file."""
-    path = os.fspath(path)
-    head, name = os.path.split(path)
-    tmp = os.path.join(head, f".{name}.{os.getpid()}.tmp")
+def _temporary(path) -> str:
+    """The temporary file beside ``path`` that :func:`replacing` writes first."""
+    head, name = os.path.split(os.fspath(path))
+    return os.path.join(head, f".{name}.{os.getpid()}.tmp")
+
+
+@contextmanager
+def replacing(*paths):
+    """Write files whole or not at all: yields one temporary path beside each of
+    ``paths`` (the same extension, for writers that choose a format by it, such as
+    matplotlib's ``savefig``); when the block ends without an error every temporary
+    file is renamed over its path (``os.replace``, atomic on POSIX and Windows).  An
+    error or an interrupt (Ctrl-C) inside the block, a full disk for one of them,
+    removes every temporary file and leaves every path as it was (absent, or its
+    old content): never a half-written file, and never one file of a set without
+    the others (``check --materials --out``'s table and CSV)."""
+    tmps = [_temporary(p) + os.path.splitext(os.fspath(p))[1] for p in paths]
     try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        yield tmps
+        for t, p in zip(tmps, paths):
+            os.replace(t, os.fspath(p))
+    except BaseException as e:
+        for t in tmps:
+            try:
+                os.unlink(t)
+            except OSError:
+                pass
+        if isinstance(e, OSError) and paths and (e.filename is None or e.filename in tmps):
+            # the error names the file the user asked for, not our temporary one (a write
+            # that fails on a full disk names none)
+            at = tmps.index(e.filename) if e.filename in tmps else 0
+            raise OSError(e.errno, e.strerror or str(e), os.fspath(paths[at])) from e
         raise
 
 
-__all__ = ["fmt", "html_table", "jsonable", "shorten", "write_atomic"]
+def write_atomic(path, text: str) -> None:
+    """Write ``text`` to ``path`` whole or not at all (:func:`replacing`)."""
+    write_all_atomic({path: text})
+
+
+def write_all_atomic(files: dict) -> None:
+    """Write every ``{path: text}`` of ``files`` or none of them (:func:`replacing`):
+    all temporary files are written before the first is renamed."""
+    with replacing(*files) as tmps:
+        for t, text in zip(tmps, files.values()):
+            try:
+                with open(t, "w", encoding="utf-8") as f:
+                    f.write(text)
+            except OSError as e:    # a full disk names no file: this one (replacing names its path)
+                if e.filename is None:
+                    raise OSError(e.errno, e.strerror or str(e), t) from e
+                raise
+
+
+__all__ = ["fmt", "html_table", "jsonable", "replacing", "shorten", "write_all_atomic", "write_atomic"]

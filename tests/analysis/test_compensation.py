@@ -247,3 +247,21 @@ def test_a_published_material_is_compensated_channel_by_channel():
     big = int(np.argmax(b[0]))
     assert np.allclose(a[:, big], 1.0, atol=2e-4)
     assert np.all(a <= 1.0 + 1e-4) and np.all(a > b)
+
+
+@pytest.mark.parametrize("cos_i", [1e-2, 3e-3, 1e-3])
+def test_kulla_conty_of_a_near_mirror_gains_no_energy_where_its_base_reflects_all(cos_i):
+    """Issue 45: the base Cook-Torrance m = 1e-4 loses energy only within ~1e-4 of the horizon;
+    its table's last interval read it as a ramp over the last degree and the compensation added
+    up to 8.6e-4 (1.00086 at cos 1e-3).  The base's albedo from the independent half-vector
+    quadrature (reference.halfvector_albedo) plus the compensation's closed-form albedo
+    ``F_ms (1 - E(L))`` (F_ms = 1: fresnel none) is at most 1, and so is the integrated albedo."""
+    from reference import halfvector_albedo
+
+    kc = plausible.make("kulla-conty:base=[cook-torrance:m=0.0001:fresnel=none]")
+    theta = math.acos(cos_i)
+    base = float(halfvector_albedo(kc.base, theta, 1e-4, n=400))
+    wi = direction(theta, 0.0)
+    assert base + float(kc.f_ms) * float(kc.loss_at(NP, wi)) <= 1.0 + 1e-6
+    assert float(albedo(kc, wi).value) <= 1.0 + 1e-6
+    assert float(albedo(kc, wi).value) == pytest.approx(base, abs=1e-6)   # the base reflects all: nothing added

@@ -101,3 +101,18 @@ def test_the_tables_are_written_whole_and_an_interrupt_leaves_the_docs_as_they_w
     with pytest.raises(KeyboardInterrupt):
         write_tables([other], tmp_path)
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_a_full_disk_at_the_csv_leaves_neither_table(row, tmp_path, disk_full_at):
+    """Issue 45: the table and its CSV are written all or none; a disk that fills while
+    the CSV is written (ENOSPC, simulated) leaves the old files as they were and no
+    table without its CSV, and the error names the file asked for."""
+    import errno
+
+    from plausible.analysis.materials import write_tables
+
+    disk_full_at("materials-table.csv")
+    with pytest.raises(OSError) as e:
+        write_tables([row], tmp_path)
+    assert e.value.errno == errno.ENOSPC and e.value.filename == str(tmp_path / "materials-table.csv")
+    assert list(tmp_path.iterdir()) == []

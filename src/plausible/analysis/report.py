@@ -10,11 +10,12 @@ import numpy as np
 
 from .adapters import as_bxdf, tolerances
 from ..arrays.backend import eager
-from ..integrals.albedo import TOL as ALBEDO_TOL, albedos, direction, is_isotropic, pdf_integrals
+from ..integrals.albedo import (TOL as ALBEDO_TOL, albedos, direction, is_isotropic, pdf_integrals,
+                                quadrature_reach)
 from ..progress import start, within
 from ..text import jsonable
-from .checks import (ENERGY_THETAS, QUICK_ALBEDO_TOL, PropertyResult, energy, energy_directions, grazing_thetas, reciprocity,
-                     sampling_consistency)
+from .checks import (ENERGY_THETAS, GUARD_SAMPLES, QUICK_ALBEDO_TOL, PropertyResult, energy, energy_directions,
+                     grazing_thetas, reciprocity, sampling_consistency)
 from .chi2 import AdaptiveBinning, chi2_many
 
 #: The chi-square cells of ``check(quick=True)`` have settled when a refinement changes
@@ -38,6 +39,9 @@ class CheckReport:
     results: list = field(default_factory=list)
     #: What the checker could not check, or excluded, and why (adapters' notes).
     notes: list = field(default_factory=list)
+    #: Which directions the checks examined and what they cannot see (:func:`reach_of`):
+    #: a PASS covers these and no more.
+    reach: dict = field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
@@ -74,7 +78,7 @@ class CheckReport:
                       unresolved=unresolved, not_applicable=n_a)
         return jsonable(dict(model=self.model, params=self.params, passed=self.passed, verdict=self.verdict,
                              counts=counts,
-                             results=results, notes=self.notes))
+                             results=results, notes=self.notes, reach=self.reach))
 
     def _repr_html_(self) -> str:
         from ..text import html_table
@@ -110,6 +114,7 @@ class CheckReport:
         lines = [f"check {self.model} {self.params}: {self.verdict}"]
         lines += ["  " + " | ".join(r) for r in self.rows()]
         lines += ["  note: " + n for n in self.notes]
+        lines += ["  reach: " + self.reach["text"]] if self.reach else []
         return "\n".join(lines)
 
 
@@ -162,6 +167,7 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
         for r in sub.results:
             r.name += f" [{label}]" if label else ""
         rep.results += sub.results
+        rep.reach = rep.reach or sub.reach
     if len(views) > 1:
         rep.notes.append("checked separately (they differ): " + ", ".join(lb for lb, _ in views[1:]))
     if hasattr(model, "annotate"):
@@ -193,6 +199,44 @@ def _albedos_of(model, wis, tol) -> list:
     return [res[k] for k in keys]
 
 
+#: Incidence (degrees) at which :func:`reach_of` measures the albedo quadrature's gaps.
+REACH_THETA_DEG = 60.0
+
+
+def reach_of(model, iso: bool, e_dirs, strata: tuple, n_sampling: int) -> dict:
+    """What :func:`check` examines and what it cannot see, as data and one sentence.
+
+    Reciprocity compares ``f`` on pairs of ``strata`` (polar x azimuthal) stratified
+    directions; energy integrates the albedo at the incidences ``e_dirs`` by the
+    quadrature of :mod:`plausible.integrals.albedo`, graded toward the mirror direction,
+    the horizon and the model's ``peak_directions`` (and the tangent axes if anisotropic),
+    guarded by :data:`~.checks.GUARD_SAMPLES` draws of the model's own sampler, which also
+    gives the sampling check's ``n_sampling`` draws per incidence.  Away from those hints
+    the quadrature's first rule leaves gaps up to ``blind_rad``
+    (:func:`~plausible.integrals.albedo.quadrature_reach` at :data:`REACH_THETA_DEG`):
+    a lobe narrower than that, pointed at by no hint and never drawn by the sampler, can
+    hold energy that neither method sees, and falls between the reciprocity pairs too
+    (issue 45: 1e-3 rad and albedo 0.1 passed both)."""
+    wi = direction(math.radians(REACH_THETA_DEG), 0.0)
+    blind = quadrature_reach(model, wi, axes=not iso)
+    try:
+        hints = [np.asarray(p, dtype=np.float64).round(6).tolist() for p in model.peak_directions(wi)]
+    except Exception:   # noqa: BLE001  a foreign object without the hint: the mirror direction is the default
+        hints = [[-float(wi[0]), -float(wi[1]), float(wi[2])]]
+    cell = (90.0 / strata[0], 360.0 / strata[1])
+    text = (f"reciprocity on {strata[0] * strata[1]} stratified directions ({cell[0]:.3g} x {cell[1]:.3g} deg "
+            f"cells), energy at {len(e_dirs)} incidences by quadrature graded toward the mirror direction, "
+            f"the horizon{', the tangent axes' if not iso else ''} and the model's peak hints ({len(hints)} at "
+            f"{REACH_THETA_DEG:g} deg), guarded by {GUARD_SAMPLES} draws of its sampler; not seen: a lobe "
+            f"narrower than {math.degrees(blind):.2g} deg ({blind:.2g} rad, the quadrature's widest gap away "
+            f"from the hints) that no hint points at and the sampler never draws")
+    return dict(reciprocity_directions=strata[0] * strata[1], reciprocity_cell_deg=cell,
+                energy_incidences_deg=[list(d) for d in e_dirs], hints_at=dict(theta_deg=REACH_THETA_DEG,
+                                                                                  directions=hints),
+                guard_samples=GUARD_SAMPLES, sampling_samples=n_sampling, blind_rad=blind,
+                blind_deg=math.degrees(blind), text=text)
+
+
 def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
     """The four checks of one contract (see :func:`check`)."""
     skip = getattr(model, "not_applicable", {})
@@ -213,6 +257,7 @@ def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
     else:
         rep.results.append(reciprocity(model, n_theta=8 if quick else 12, n_phi=16 if quick else 24,
                                        tol=tol["reciprocity"]))
+    rep.reach = reach_of(model, iso, e_dirs, (8, 16) if quick else (12, 24), n_s)
     tick()
     # the albedos of the energy and the sampling checks' incidences, integrated together
     e_wis = [direction(math.radians(t), math.radians(p)) for t, p in e_dirs] if "energy" not in skip else []

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..analysis import albedo_curve, direction
 from ..text import jsonable, write_atomic
-from ..plotting import _plt, default_thetas, plot_albedo_curves
+from ..plotting import _plt, default_thetas, plot_albedo_curves, save_figure
 
 PLANE_THETAS_DEG = (0.0, 30.0, 60.0, 75.0)
 
@@ -58,9 +58,7 @@ def plot_plane(result, path, thetas_deg=PLANE_THETAS_DEG, n: int = 361):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path)
 
 
 def write_plots(result, out_dir, points: int = 24, progress=None) -> list:

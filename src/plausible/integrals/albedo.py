@@ -30,7 +30,7 @@ from ..directions import as_directions
 from ..progress import start
 from ..vec import direction as _direction
 from .keys import exact_text
-from .quadrature import half_vector_breaks, half_vector_lune, half_vector_tmax, panel_rule
+from .quadrature import half_vector_breaks, half_vector_level, half_vector_lune, half_vector_tmax, panel_rule
 
 
 @dataclass(frozen=True)
@@ -103,6 +103,8 @@ class _Rules:
         self.model, self.wi, self.levels, self.axes = model, wi, levels, axes
         cut = getattr(model, "mirror_cut", None)
         self.lune = bool(cut()) if callable(cut) else False
+        kink = getattr(model, "level_kink", None)
+        self.kink = bool(kink()) if callable(kink) else False
         self._breaks = {}
         self._nodes = {}
         self.sums = {}
@@ -124,12 +126,22 @@ class _Rules:
         s, ws = panel_rule(sb, m)
         p, wp = panel_rule(pb, m)
         tmax = half_vector_tmax(self.wi, p)
-        if not self.lune:
+        cuts = []
+        if self.lune:
+            cuts.append(half_vector_lune(self.wi, p))
+        if self.kink:
+            cuts.append(half_vector_level(self.wi, p))
+        if not cuts:
             return s, ws, p, wp, np.zeros_like(p), tmax
-        t1 = np.minimum(half_vector_lune(self.wi, p), tmax)
-        out = tmax > t1 * (1.0 + 1e-15)
-        return (s, ws, np.concatenate([p, p[out]]), np.concatenate([wp, wp[out]]),
-                np.concatenate([np.zeros_like(p), t1[out]]), np.concatenate([t1, tmax[out] - t1[out]]))
+        edges = np.sort(np.vstack([np.zeros_like(p)] + [np.minimum(c, tmax) for c in cuts] + [tmax]), axis=0)
+        cols = [np.ones(len(p), dtype=bool)]        # every azimuth's first segment, then the others
+        for lo_, hi_ in zip(edges[1:-1], edges[2:]):
+            cols.append(hi_ > lo_ * (1.0 + 1e-15))
+        t0 = [edges[0]] + [lo_[c] for lo_, c in zip(edges[1:-1], cols[1:])]
+        first_end = edges[1]
+        span = [first_end] + [(hi_ - lo_)[c] for lo_, hi_, c in zip(edges[1:-1], edges[2:], cols[1:])]
+        return (s, ws, np.concatenate([p[c] for c in cols]), np.concatenate([wp[c] for c in cols]),
+                np.concatenate(t0), np.concatenate(span))
 
     def shared(self, m, refine):
         """Which nodes the rules ``(m, refine)`` and ``(m, 2 refine)`` share: ``(s1, c1, s2,
@@ -378,6 +390,52 @@ def _integrate(model, kind, wis, tol, levels):
             else:
                 state[a] = (k, 2 * r)
     return values, errors
+
+
+def quadrature_reach(model, wi, *, levels: int = 13, probes: int = 10_000, axes: bool | None = None) -> float:
+    """What :func:`albedo` at ``wi`` cannot see: the largest angle (radians) between an
+    outgoing direction of the upper hemisphere and the nearest node of the finest rule of
+    the first refinement step (order 6 on the twice finer floor, the half-vector frame graded
+    toward the mirror direction, the horizon, the model's ``peak_directions`` and, where
+    ``axes``, the tangent axes; the extra panel edges of a lune or a kink, which only add
+    nodes, left out).  A lobe narrower than this, centred in such a gap and away from every
+    hint, adds next to nothing to the first step's sums, so its bound stays small and the
+    integration stops there: the lobe is missed.
+
+    Measured on ``probes`` directions of a Fibonacci lattice, and returned plus the lattice's
+    spacing ``sqrt(2 pi / probes)`` (0.025 rad by default; every direction lies within it of
+    a probe, so the sum bounds the gap from above): each probe's half vector is placed in the tensor rule (``s`` and
+    ``phi`` node arrays, by bisection) and its distance to the 3 x 3 nodes around it taken in
+    ``wo`` (3 x 4: the map from ``h`` to ``wo`` is not linear).  ``axes`` defaults to :func:`is_isotropic`'s answer."""
+    wi = _unit_incidence(wi)
+    if wi[2] <= 0:
+        return math.pi
+    rules = _Rules(model, wi, levels, (not is_isotropic(model)) if axes is None else axes)
+    rules.lune = rules.kink = False
+    s, _, p, _, _, tmax = rules.nodes(ORDERS[1], 2)
+    k = np.arange(probes) + 0.5
+    z = 1.0 - k / probes                       # a Fibonacci lattice on the upper hemisphere
+    a = k * math.pi * (3.0 - math.sqrt(5.0))
+    q = np.stack([np.sqrt(1 - z * z) * np.cos(a), np.sqrt(1 - z * z) * np.sin(a), z], axis=-1)
+    h = q + wi
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    lo = p[0] - 0.5 * (p[0] + 2 * math.pi - p[-1])     # the azimuth range of the rule, periodic
+    ph = lo + (np.arctan2(h[:, 1], h[:, 0]) - lo) % (2 * math.pi)
+    th = np.arccos(np.clip(h[:, 2], -1.0, 1.0))
+    j = np.searchsorted(p, ph)[:, None] + np.arange(-2, 1)[None, :]
+    j = j % len(p)
+    sq = th[:, None] / tmax[j]
+    best = np.full(probes, np.inf)
+    for c in range(j.shape[1]):
+        ii = np.searchsorted(s, sq[:, c])
+        for di in (-2, -1, 0, 1):
+            n = np.clip(ii + di, 0, len(s) - 1)
+            t = s[n] * tmax[j[:, c]]
+            pc = p[j[:, c]]
+            hn = np.stack([np.sin(t) * np.cos(pc), np.sin(t) * np.sin(pc), np.cos(t)], axis=-1)
+            wo = 2.0 * (hn @ wi)[:, None] * hn - wi
+            best = np.minimum(best, np.arccos(np.clip(np.sum(wo * q, axis=-1), -1.0, 1.0)))
+    return float(np.max(best)) + math.sqrt(2.0 * math.pi / probes)
 
 
 def _unit_incidence(wi):

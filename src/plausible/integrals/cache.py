@@ -123,4 +123,20 @@ def horizon_albedos(model, progress=None) -> np.ndarray:
     return _cached("horizon", model, compute)
 
 
-__all__ = ["HORIZON_COS", "albedo_table_of", "horizon_albedos", "spec_of", "table_cache_dir"]
+def albedo_grid_of(model, thetas, phis, tol: float = 1e-6) -> np.ndarray:
+    """The largest channel's directional albedo of ``model`` at every polar angle ``thetas``
+    and azimuth ``phis`` (radians), shape ``(len(thetas), len(phis))``, integrated to ``tol``
+    and cached like the tables (the key holds the angles)."""
+    thetas, phis = [float(t) for t in thetas], [float(p) for p in phis]
+
+    def compute():
+        from .albedo import albedos, direction
+
+        res = albedos(model, [direction(t, p) for t in thetas for p in phis], tol=tol)
+        return np.array([np.max(np.atleast_1d(r.value)) for r in res]).reshape(len(thetas), len(phis))
+
+    kind = "grid-" + hashlib.sha1(repr((thetas, phis, tol)).encode()).hexdigest()[:12]
+    return _cached(kind, model, compute)
+
+
+__all__ = ["HORIZON_COS", "albedo_grid_of", "albedo_table_of", "horizon_albedos", "spec_of", "table_cache_dir"]

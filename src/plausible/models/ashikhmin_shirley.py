@@ -239,6 +239,9 @@ class AshikhminShirley(BxDF):
     def lobe_weights(self, ops, wi, q):
         return self.spec_probability(ops, wi, q), self.diffuse_probability(ops, wi, q)
 
+    def level_kink(self):
+        return True     # max(n.k1, n.k2) of eq. 4
+
 
 @register("ashikhmin-shirley-specular",
           "Specular term of Ashikhmin-Shirley alone (JGT 2000 eq. 4): metals.",
@@ -257,6 +260,9 @@ class AshikhminShirleySpecular(BxDF):
 
     def _sample(self, ops, wi, u, q):
         return specular_sample(ops, wi, q.nu, q.nv, u[1], u[2])
+
+    def level_kink(self):
+        return True     # max(n.k1, n.k2) of eq. 4
 
 
 @register("ashikhmin-shirley-diffuse",

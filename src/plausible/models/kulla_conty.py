@@ -44,7 +44,7 @@ import numpy as np
 from .. import fresnel, vec, warps
 from ..bxdf import BxDF, OfBase
 from ..integrals.albedo import hemispherical_albedo
-from ..integrals.cache import albedo_table_of, horizon_albedos
+from ..integrals.cache import albedo_grid_of, albedo_table_of, horizon_albedos
 from ..integrals.quadrature import gauss_legendre
 from ..arrays.ops import INV_PI, NP
 from ..params import ModelParam, Param
@@ -151,7 +151,7 @@ class KullaConty(OfBase):
         #: would turn the last bit of ``E`` into 1e-12 of the lobe and NumPy and Dr.Jit would differ
         # (and a loss below LOSS_FLOOR, where 1 - E is the rounding of the integrals, counts as none)
         loss = 1.0 - self.table.values
-        self.loss_table = AngleTable(np.where(loss > LOSS_FLOOR, loss, 0.0))
+        self.loss_table = AngleTable(horizon_safe_loss(base, np.where(loss > LOSS_FLOOR, loss, 0.0)))
         #: ``(1/pi) int (1 - E) cos``: the energy the base loses, averaged (``1 - E_avg``).
         self.loss = table_average(self.loss_table, lambda v: np.where(v > LOSS_FLOOR, v, 0.0))
         self.e_avg = 1.0 - self.loss
@@ -224,6 +224,50 @@ class KullaConty(OfBase):
     def lobes(self):
         return BxDF.lobes(self)
 
+
+
+#: Where :func:`horizon_safe_loss` compares the loss table with the base's own loss: these
+#: fractions of the table's last interval away from the horizon (with the 1-degree table
+#: of a smooth base, ``cos(theta)`` 8.7e-3 down to 2.7e-4).
+PROBE_FRACTIONS = (0.5, 0.25, 1.0 / 16, 1.0 / 64)
+#: An interpolated loss above the base's own at a probe by more than this (a tenth of the
+#: energy check's 1e-4; the probes are integrated to 1e-6) lowers the horizon node.
+PROBE_TOL = 1e-5
+
+
+def horizon_safe_loss(base, loss) -> np.ndarray:
+    """The loss table's node values ``loss`` (``1 - E`` at the :class:`AngleTable` nodes,
+    shape ``(N,)`` or ``(N, M)``) with the horizon node lowered where the interpolant
+    overstates the base's own loss in the last interval.
+
+    The compensated albedo at ``L`` is ``E(L) + F_ms loss_table(L)`` (the multiple-scattering
+    lobe integrates to its table's loss exactly), so it exceeds 1 by the table's overstatement
+    ``loss_table(L) - (1 - E(L))``.  The last node is the albedo 1e-6 rad above the horizon;
+    a base that loses energy only there (Cook-Torrance ``m = 1e-4``, V-groove: ``1 - E`` is
+    5e-8 at ``cos(theta) = 1e-3``, 0.06 at 1e-4, 9.4e-4 at the node) is interpolated as a ramp
+    over the last interval (8.6e-4 at ``cos = 1e-3``: an albedo of 1.00086, issue 45).  So the
+    interpolant is compared with the base's albedo at :data:`PROBE_FRACTIONS` of the last
+    interval, every azimuth of the table (:func:`~plausible.integrals.cache.albedo_grid_of`,
+    cached); where it exceeds one by more than :data:`PROBE_TOL` the horizon node is lowered
+    to the smallest loss of the probes (then to 0 if that is not enough).  The compensation
+    then vanishes where the base's albedo is 1, and within the last hundredths of a degree it
+    gives back less than the base loses (conserving, not exact).  Only the horizon node
+    moves: a lowered inner node makes the cubic interpolant overshoot in the intervals beside
+    it (Cook-Torrance ``m = 0.05``: 1.001 at ``cos = 0.02``).  A resolved table (Cook-Torrance
+    ``m = 0.05`` and the default ``m = 0.5``) passes unchanged."""
+    values = np.array(loss, dtype=np.float64)
+    table = AngleTable(values)
+    h = 0.5 * math.pi / (table.n_theta - 1)
+    probes = 0.5 * math.pi - h * np.asarray(PROBE_FRACTIONS)
+    phis = None if table.isotropic else table.phis()
+    true = 1.0 - albedo_grid_of(base, probes, table.phis())
+    true = true if phis is not None else true[:, 0]
+    for floor in (np.min(true, axis=0), 0.0):
+        over = AngleTable(values).lookup_angles(probes, phis) - true > PROBE_TOL
+        if not over.any():
+            break
+        values[-1] = np.where(over.any(axis=0), np.minimum(values[-1], np.maximum(floor, 0.0)), values[-1])
+    return values
 
 
 def check_finite_albedo(base, owner: str, progress=None) -> None:

@@ -90,3 +90,6 @@ class NeumannMetal(BxDF):
 
     def _sample(self, ops, wi, u, q):
         return phong_sample(ops, wi, q.n, u[1], u[2])
+
+    def level_kink(self):
+        return True     # max(N.L, N.V) of eq. 22

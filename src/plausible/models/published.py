@@ -81,6 +81,9 @@ class AshikhminShirleyDielectric(BxDF):
     def _sample(self, ops, wi, u, q):
         return AS.specular_sample(ops, wi, q.n, q.n, u[1], u[2])
 
+    def level_kink(self):
+        return True     # max(n.k1, n.k2)
+
 
 def _wide_params():
     out = []

@@ -170,6 +170,9 @@ class PumpedUp(OfBase):
         return correction(ops, self.params["correction"],
                           [(tab.lookup(ops, wi), tab.lookup(ops, wo)) for tab in self.tables], wi, wo)
 
+    def level_kink(self):
+        return True     # g = max(a(L), a(V), ...): a(L) = a(V) where wo_z = wi_z (an albedo of theta alone)
+
     def _f(self, ops, wi, wo, p):
         f = self.base._f(ops, wi, wo, self.base.p)
         g = self.g(ops, wi, wo)

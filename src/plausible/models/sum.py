@@ -225,6 +225,9 @@ class Sum(BxDF):
     def mirror_cut(self):
         return any(m.mirror_cut() for m in self.parts)
 
+    def level_kink(self):
+        return any(m.level_kink() for m in self.parts)
+
     def __repr__(self) -> str:
         parts = ", ".join(repr(m) if s is None else f"({m!r}, {fmt(s, '.6g')})"
                           for m, s in zip(self.parts, self.scales))
