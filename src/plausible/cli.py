@@ -834,17 +834,22 @@ class _BatchBar:
 @main.command()
 @click.option("--port", type=click.IntRange(1, 65535), default=8765, show_default=True, help="Port to listen on.")
 @click.option("--host", default="127.0.0.1", show_default=True,
-              help="Address to bind (localhost by default; another address exposes the explorer to the network).")
+              help="Address to bind (127.0.0.1 by default, also when empty; naming another address exposes the "
+                   "explorer to the network, and says so).")
 @click.option("--no-browser", is_flag=True, help="Do not open the page in a browser.")
 def explore(port, host, no_browser):
     """Interactive BRDF explorer in the browser (lit sphere, lobes, albedo, verdict, exports)."""
-    from .explorer import bind, serve
+    from .explorer import bind, resolve_host, serve, url_of
 
+    host, exposed = resolve_host(host)  # '' is loopback; only a named address exposes the explorer
     try:
         sock = bind(host, port)         # before the URL is announced: a busy port fails here
     except ValueError as e:
         _fail(f"{e} with --port")
-    console.print(f"plausible explorer on http://{host}:{port}/ (Ctrl-C to stop)", soft_wrap=True)
+    if exposed:
+        console.print(f"[bold red]WARNING: --host {host} makes the explorer reachable from the network: other "
+                      f"machines can connect to port {port} (leave --host out for this machine only)[/]", soft_wrap=True)
+    console.print(f"plausible explorer on {url_of(host, port)} (Ctrl-C to stop)", soft_wrap=True)
     try:
         serve(host=host, port=port, open_browser=not no_browser, sock=sock)
     except KeyboardInterrupt:
