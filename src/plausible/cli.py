@@ -37,8 +37,9 @@ def _angles(text, what):
         t, p = (float(x) for x in text.split(","))
     except ValueError:
         _fail(f"{what} must be THETA_DEG,PHI_DEG (e.g. 30,0), got {text!r}")
-    if not (0 <= t <= 180):
-        _fail(f"{what}: theta must lie in [0, 180] degrees, got {t}")
+    if not (0 <= t <= 90):
+        below = " (below the horizon, where a BRDF is not defined)" if 90 < t <= 180 else ""
+        _fail(f"{what}: theta must lie in [0, 90] degrees, got {t:g}{below}")
     if not math.isfinite(p):
         _fail(f"{what}: phi must be a finite angle in degrees, got {p}")
     return direction(math.radians(t), math.radians(p))
