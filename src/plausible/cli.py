@@ -522,8 +522,11 @@ def _print_report(rep):
               help="Azimuth of incidence (degrees).")
 @click.option("-n", "--points", default=46, show_default=True, type=click.IntRange(1, 100_000),
               help="Number of incidence angles.")
+@click.option("--log", "log_axis", is_flag=True,
+              help="With --plot: a logarithmic albedo axis (else a curve far above the others is clipped, "
+                   "with a note).")
 @click.option("--json", "as_json", is_flag=True, help="Print the curves as JSON.")
-def albedo(models, params, plot, phi, points, as_json):
+def albedo(models, params, plot, phi, points, as_json, log_axis):
     """Directional albedo against incidence angle, for one or more models.
 
     MODELS are names with optional parameters, e.g. reciprocal-phong:n=150
@@ -544,7 +547,7 @@ def albedo(models, params, plot, phi, points, as_json):
         _echo_json([dict(model=registry.spec_of(m), phi_deg=phi, theta_deg=np.degrees(th), value=r.value,
                          error=r.error) for m, (_, _, r) in zip(targets, curves)])
         if plot:
-            plot_albedo_curves(curves, plot)
+            plot_albedo_curves(curves, plot, yscale="log" if log_axis else "linear")
         return
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
@@ -554,7 +557,7 @@ def albedo(models, params, plot, phi, points, as_json):
         t.add_row(f"{math.degrees(x):.2f}", *[_fmt_alb(r.value[i], r.error[i]) for _, _, r in curves])
     console.print(t)
     if plot:
-        plot_albedo_curves(curves, plot)
+        plot_albedo_curves(curves, plot, yscale="log" if log_axis else "linear")
         console.print(f"wrote {escape(str(plot))}")
 
 
