@@ -144,7 +144,16 @@ def test_eval_non_finite_phi_blames_phi():
     r = run("eval", "lambertian", "--wi", "30,nan", "--wo", "0,0")
     assert r.exit_code == 2 and "--wi: phi must be a finite angle in degrees, got nan" in r.output
     r = run("eval", "lambertian", "--wi", "nan,0", "--wo", "0,0")
-    assert r.exit_code == 2 and "--wi: theta must lie in [0, 180] degrees, got nan" in r.output
+    assert r.exit_code == 2 and "--wi: theta must lie in [0, 90] degrees, got nan" in r.output
+
+
+@pytest.mark.parametrize("flag,angle", [("--wi", "95,0"), ("--wo", "90.5,30"), ("--wi", "180,0")])
+def test_eval_refuses_a_direction_below_the_horizon(flag, angle):
+    other = "--wo" if flag == "--wi" else "--wi"
+    r = run("eval", "lambertian", flag, angle, other, "0,0")
+    assert r.exit_code == 2 and f"{flag}: theta must lie in [0, 90] degrees" in r.output
+    assert "below the horizon" in r.output and "Traceback" not in r.output
+    assert run("eval", "lambertian", flag, "90,0", other, "0,0").exit_code == 0      # grazing is allowed
 
 
 def test_parameter_without_a_name():

@@ -113,3 +113,49 @@ def test_documented_python(code, in_repo_copy):
     if "img" in ns:                      # the scene renders: finite, non-negative, not blank
         img = np.asarray(ns["img"])
         assert img.shape == (64, 64, 3) and np.all(np.isfinite(img)) and img.min() >= 0 and img.std() > 0.01
+
+
+def _cited(text):
+    """The objects named `plausible.a.b` in ``text`` (ImportError/AttributeError if one does not exist)."""
+    import importlib
+
+    out = {}
+    for name in re.findall(r"`(plausible(?:\.\w+)+)`", text):
+        parts = name.split(".")
+        for k in range(len(parts), 0, -1):       # the longest importable module, then attributes
+            try:
+                obj = importlib.import_module(".".join(parts[:k]))
+            except ImportError:
+                continue
+            for a in parts[k:]:
+                obj = getattr(obj, a)
+            out[name] = obj
+            break
+    return out
+
+
+def _export_sources_are_functions(paragraph):
+    """Every name cited in the explorer's Export paragraph is a function (not a module)."""
+    cited = _cited(paragraph)
+    return bool(cited) and all(callable(v) for v in cited.values())
+
+
+def test_the_explorer_doc_cites_functions_where_it_names_what_exports():
+    import types
+
+    text = (ROOT / "docs" / "explorer.md").read_text()
+    cited = _cited(text)
+    assert all(not isinstance(v, types.ModuleType) or "app" in k for k, v in cited.items()), cited
+    export = re.search(r"\*\*Export\*\*.*?\n\n", text, flags=re.S).group(0)
+    assert _export_sources_are_functions(export)
+    assert not _export_sources_are_functions("Mitsuba 3 dict and XML element (`plausible.mitsuba.scene_dict`)")
+
+
+def test_evaluate_fit_documents_what_it_returns():
+    import plausible
+    from plausible.fitting import evaluate_fit
+
+    r = evaluate_fit(plausible.make("ward", alpha_x=0.2, alpha_y=0.2), "ward:alpha_x=0.25:alpha_y=0.25")
+    assert set(r) == {"errors", "albedo"}
+    doc = evaluate_fit.__doc__
+    assert all(f'"{k}"' in doc for k in r) and all(k in doc for k in r["errors"])

@@ -159,3 +159,36 @@ def test_notebook_html_shows_the_parameters_escaped():
     assert "<td>0.5</td>" in a._repr_html_()
     rep = plausible.check("lambertian:rd=0.5", quick=True)
     assert "<td>reciprocity</td>" in rep._repr_html_() and "PASS" in rep._repr_html_()
+
+
+@pytest.mark.parametrize("typed,meant", [("ngan2005/as", "ngan2005/ashikhmin-shirley"),
+                                         ("ngan2005/ct", "ngan2005/cook-torrance"),
+                                         ("ngan2005/bp", "ngan2005/blinn-phong"),
+                                         ("low2012/ct", "low2012/cook-torrance-e1")])
+def test_an_abbreviated_fit_name_suggests_the_fit_it_abbreviates(typed, meant):
+    with pytest.raises(ValueError, match=r"did you mean " + meant):     # listed first
+        plausible.make(f"material:nickel@{typed}")
+
+
+def test_an_abbreviated_model_name_suggests_it_and_unrelated_names_are_not_suggested():
+    from plausible.text import closest
+
+    assert closest("as", ["ashikhmin-shirley", "ward", "lambertian"]) == ["ashikhmin-shirley"]
+    assert closest("mp", ["modified-phong", "phong"])[0] == "modified-phong"
+    assert closest("zz", ["ashikhmin-shirley", "ward"]) == []
+    assert closest("ngan2005/as", ["low2012/ashikhmin-shirley-e1"]) == []      # another fit set: no
+    with pytest.raises(ValueError, match=r"did you mean ashikhmin-shirley"):
+        plausible.make("as")
+
+
+def test_a_shape_mismatch_names_wi_and_wo():
+    m = plausible.make("lambertian")
+    a, b = np.tile([0.0, 0.0, 1.0], (5, 1)), np.tile([0.6, 0.0, 0.8], (4, 1))
+    for backend in ("numpy", "drjit", None):
+        with pytest.raises(ValueError, match=r"wi of shape \(5, 3\) and wo of shape \(4, 3\) do not broadcast"):
+            m.eval(a, b, backend=backend)
+    with pytest.raises(ValueError, match=r"wi of shape \(5, 3\) and wo of shape \(4, 3\)"):
+        m.pdf(a, b)
+    with pytest.raises(ValueError, match=r"wi of shape \(5, 3\) and u of shape \(4, 3\)"):
+        m.sample(a, np.full((4, 3), 0.5))
+    assert m.eval(a, b[0]).shape == (5,)                   # one direction for all still broadcasts

@@ -362,7 +362,7 @@ class BxDF:
         if out is not None:
             return out
         (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
-        shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
+        shape = D.batch_shape(wi=wi, wo=wo)
         n = int(np.prod(shape))
         be = _backend.choose(n, self, backend, kernel="eval")
         if n <= D.CHUNK:
@@ -387,7 +387,7 @@ class BxDF:
         if out is not None:
             return out
         (wi, wi_unit), (wo, wo_unit) = D.prepare("wi", wi), D.prepare("wo", wo)
-        shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
+        shape = D.batch_shape(wi=wi, wo=wo)
         n = int(np.prod(shape))
         be = _backend.choose(n, self, backend, kernel="pdf")
         if n <= D.CHUNK:
@@ -413,7 +413,7 @@ class BxDF:
             return out
         wi, wi_unit = D.prepare("wi", wi)
         u = D.as_unit_interval(u)
-        shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
+        shape = D.batch_shape(wi=wi, u=u)
         n = int(np.prod(shape))
         be = _backend.choose(n, self, backend, kernel="sample")
         ni = D.unit_fn(wi_unit)

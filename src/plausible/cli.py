@@ -60,8 +60,9 @@ def _angles(text, what):
         t, p = (float(x) for x in text.split(","))
     except ValueError:
         _fail(f"{what} must be THETA_DEG,PHI_DEG (e.g. 30,0), got {text!r}")
-    if not (0 <= t <= 180):
-        _fail(f"{what}: theta must lie in [0, 180] degrees, got {t}")
+    if not (0 <= t <= 90):
+        below = " (below the horizon, where a BRDF is not defined)" if 90 < t <= 180 else ""
+        _fail(f"{what}: theta must lie in [0, 90] degrees, got {t:g}{below}")
     if not math.isfinite(p):
         _fail(f"{what}: phi must be a finite angle in degrees, got {p}")
     return direction(math.radians(t), math.radians(p))
@@ -689,8 +690,11 @@ def _print_report(rep):
               help="Azimuth of incidence (degrees).")
 @click.option("-n", "--points", default=46, show_default=True, type=click.IntRange(1, 100_000),
               help="Number of incidence angles.")
+@click.option("--log", "log_axis", is_flag=True,
+              help="With --plot: a logarithmic albedo axis (else a curve far above the others is clipped, "
+                   "with a note).")
 @click.option("--json", "as_json", is_flag=True, help="Print the curves as JSON.")
-def albedo(models, params, plot, phi, points, as_json):
+def albedo(models, params, plot, phi, points, as_json, log_axis):
     """Directional albedo against incidence angle, for one or more models.
 
     MODELS are names with optional parameters, e.g. reciprocal-phong:n=150
@@ -711,7 +715,7 @@ def albedo(models, params, plot, phi, points, as_json):
         _echo_json([dict(model=registry.spec_of(m), phi_deg=phi, theta_deg=np.degrees(th), value=r.value,
                          error=r.error) for m, (_, _, r) in zip(targets, curves)])
         if plot is not None:
-            plot_albedo_curves(curves, plot)
+            plot_albedo_curves(curves, plot, yscale="log" if log_axis else "linear")
         return
     t = Table(title="directional albedo")
     t.add_column("theta (deg)")
@@ -721,7 +725,7 @@ def albedo(models, params, plot, phi, points, as_json):
         t.add_row(f"{math.degrees(x):.2f}", *[_fmt_alb(r.value[i], r.error[i]) for _, _, r in curves])
     console.print(t)
     if plot is not None:
-        plot_albedo_curves(curves, plot)
+        plot_albedo_curves(curves, plot, yscale="log" if log_axis else "linear")
         console.print(f"wrote {escape(str(plot))}")
 
 
@@ -1047,17 +1051,22 @@ class _BatchBar:
 @main.command()
 @click.option("--port", type=click.IntRange(1, 65535), default=8765, show_default=True, help="Port to listen on.")
 @click.option("--host", default="127.0.0.1", show_default=True,
-              help="Address to bind (localhost by default; another address exposes the explorer to the network).")
+              help="Address to bind (127.0.0.1 by default, also when empty; naming another address exposes the "
+                   "explorer to the network, and says so).")
 @click.option("--no-browser", is_flag=True, help="Do not open the page in a browser.")
 def explore(port, host, no_browser):
     """Interactive BRDF explorer in the browser (lit sphere, lobes, albedo, verdict, exports)."""
-    from .explorer import bind, serve
+    from .explorer import bind, resolve_host, serve, url_of
 
+    host, exposed = resolve_host(host)  # '' is loopback; only a named address exposes the explorer
     try:
         sock = bind(host, port)         # before the URL is announced: a busy port fails here
     except ValueError as e:
         _fail(f"{e} with --port")
-    console.print(f"plausible explorer on http://{host}:{port}/ (Ctrl-C to stop)", soft_wrap=True)
+    if exposed:
+        console.print(f"[bold red]WARNING: --host {host} makes the explorer reachable from the network: other "
+                      f"machines can connect to port {port} (leave --host out for this machine only)[/]", soft_wrap=True)
+    console.print(f"plausible explorer on {url_of(host, port)} (Ctrl-C to stop)", soft_wrap=True)
     try:
         serve(host=host, port=port, open_browser=not no_browser, sock=sock)
     except KeyboardInterrupt:

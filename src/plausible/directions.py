@@ -199,6 +199,19 @@ def prepare(name: str, w):
     return a, False
 
 
+def batch_shape(**arrays) -> tuple:
+    """The broadcast batch shape (without the last axis of 3) of the named
+    direction arrays, or ValueError naming them and their shapes
+    (``batch_shape(wi=a, wo=b)``: "wi of shape (5, 3) and wo of shape (4, 3) do
+    not broadcast ...")."""
+    try:
+        return np.broadcast_shapes(*(a.shape for a in arrays.values()))[:-1]
+    except ValueError:
+        said = " and ".join(f"{k} of shape {tuple(a.shape)}" for k, a in arrays.items())
+        raise ValueError(f"{said} do not broadcast: give the same number of directions, or one "
+                         f"direction (shape (3,)) for all") from None
+
+
 def raw_rows(w):
     """``w`` as an array of shape ``(..., 3)`` for a front end that validates and
     normalises inside its kernel: a float32 or float64 array as given (no NumPy

@@ -74,9 +74,9 @@ def info(name: str) -> ModelInfo:
     try:
         return _REGISTRY[name]
     except (KeyError, TypeError):
-        import difflib
+        from .text import closest
 
-        close = difflib.get_close_matches(str(name), list(_REGISTRY), n=3, cutoff=0.6)
+        close = closest(str(name), _REGISTRY, n=3, cutoff=0.6)
         hint = f" (did you mean {' or '.join(close)}?)" if close else ""
         raise ValueError(f"unknown model {name!r}{hint}; registered models: "
                          f"{', '.join(sorted(_REGISTRY))}") from None

@@ -75,6 +75,34 @@ def shorten(text: str, n: int = 60) -> str:
     return text if len(text) <= n else text[:n - 3] + "..."
 
 
+def _abbreviates(word: str, option: str) -> bool:
+    """Whether ``word`` abbreviates ``option`` segment by segment (segments split
+    at ``/``): each segment of ``word`` is a prefix of the option's segment, or
+    the initials of its hyphen-separated words (``as`` for
+    ``ashikhmin-shirley``, ``ngan2005/as`` for ``ngan2005/ashikhmin-shirley``)."""
+    ws, os_ = word.lower().split("/"), option.lower().split("/")
+    if len(ws) != len(os_) or not word:
+        return False
+    for w, o in zip(ws, os_):
+        parts = [x for x in o.split("-") if x]
+        initials = "".join(x[0] for x in parts)
+        if not (o.startswith(w) or (len(w) > 1 and initials.startswith(w))):
+            return False
+    return True
+
+
+def closest(word: str, options, n: int = 5, cutoff: float = 0.5) -> list:
+    """Up to ``n`` of ``options`` a user who typed ``word`` may have meant: those
+    ``word`` abbreviates (prefix or initials, :func:`_abbreviates`) first, then
+    :func:`difflib.get_close_matches` at ``cutoff``."""
+    import difflib
+
+    options = [str(o) for o in options]
+    short = [o for o in options if o != word and _abbreviates(str(word), o)]
+    close = difflib.get_close_matches(str(word), options, n=n, cutoff=cutoff)
+    return list(dict.fromkeys(short + close))[:n]
+
+
 def html_table(caption: str, header, rows) -> str:
     """An HTML ``<table>`` (every cell escaped) with a caption, for notebooks.
 

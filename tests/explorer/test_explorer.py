@@ -413,3 +413,99 @@ def test_the_slice_has_a_colour_bar_with_its_maximum(page, client):
     px = page.evaluate("""() => { const g = document.getElementById('slice-bar').getContext('2d');
         return [Array.from(g.getImageData(5, 0, 1, 1).data), Array.from(g.getImageData(5, 191, 1, 1).data)]; }""")
     assert px[0][:3] == [253, 231, 37] and px[1][:3] == [68, 1, 84]
+
+
+# -- at laptop width (issue 47 item 2) -------------------------------------------------------
+
+def _boxes_apart(a, b):
+    return a["x"] + a["width"] <= b["x"] or b["x"] + b["width"] <= a["x"] or \
+        a["y"] + a["height"] <= b["y"] or b["y"] + b["height"] <= a["y"]
+
+
+def test_compare_mode_fits_1280x800_with_both_spheres_in_view(page, tmp_path):
+    from PIL import Image
+
+    page.set_viewport_size({"width": 1280, "height": 800})
+    page.select_option("#model-A", "ashikhmin-shirley")
+    page.wait_for_function("window.explorer.sides.A.name === 'ashikhmin-shirley' && window.explorer.data.A.plane")
+    page.select_option("#model-B", "phong")
+    page.wait_for_function("window.explorer.sides.B && window.explorer.sides.B.drawn >= 1 "
+                           "&& window.explorer.data.B.plane", timeout=60_000)
+    _idle(page)
+    page.evaluate("window.scrollTo(0, 0)")
+    assert page.evaluate("document.documentElement.scrollWidth") <= 1280          # no horizontal overflow
+    shot = tmp_path / "compare.png"
+    page.screenshot(path=str(shot))
+    img = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
+    assert img.shape[:2] == (800, 1280)
+    for k in "AB":
+        b = page.locator(f"#sphere-{k}").bounding_box()
+        assert b["width"] >= 200 and b["x"] >= 0 and b["y"] >= 0
+        assert b["x"] + b["width"] <= 1280 and b["y"] + b["height"] <= 800, (k, b)
+        # the screenshot shows the sphere there: grey (#444) corners, a lit disc inside
+        x0, y0, w = int(b["x"]), int(b["y"]), int(b["width"])
+        corner = img[y0 + 3, x0 + 3]
+        disc = img[y0 + w // 4: y0 + 3 * w // 4, x0 + w // 4: x0 + 3 * w // 4].reshape(-1, 3)
+        assert np.all(np.abs(corner - 0x44) <= 2), (k, corner)
+        assert np.abs(disc - 0x44).max() > 60, k
+    page.select_option("#model-B", "")
+
+
+def test_material_mode_labels_name_the_choice_not_its_set(page):
+    page.select_option("#model-A", "material")
+    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.plane",
+                           timeout=60_000)
+    labels = page.locator("#params-A label").all_inner_texts()
+    assert labels == ["name (100 choices)", "fit (13 choices)"], labels
+
+
+def test_albedo_caption_and_slice_labels_read_cleanly(page):
+    page.set_viewport_size({"width": 1280, "height": 800})
+    page.select_option("#model-A", "ward")
+    page.wait_for_function("window.explorer.sides.A.name === 'ward' && window.explorer.data.A.albedo "
+                           "&& window.explorer.data.A.slice", timeout=60_000)
+    page.select_option("#model-B", "lambertian")
+    page.wait_for_function("window.explorer.sides.B && window.explorer.data.B.slice", timeout=60_000)
+    _idle(page)
+    caption = page.locator("#albedo-note").evaluate("e => e.parentNode.innerText")
+    assert caption.endswith("red: energy gained)") and "; )" not in caption
+    # each colour-bar label is one line beside the bar, over neither slice
+    slices = [page.locator(f"#slice-{k}").bounding_box() for k in "AB"]
+    spans = page.locator("#slice-scale span")
+    assert spans.count() == 3
+    for i in range(3):
+        b = spans.nth(i).bounding_box()
+        assert b["height"] < 20 and all(_boxes_apart(b, s) for s in slices), (i, b, slices)
+    page.select_option("#model-B", "")
+
+
+def test_a_narrow_lobe_says_what_the_sky_dots_are(page):
+    page.select_option("#model-A", "material")          # alum-bronze, A-S n = 1350: half-maximum width ~7 deg
+    page.wait_for_function("window.explorer.sides.A.name === 'material' && window.explorer.data.A.plane",
+                           timeout=60_000)
+    _idle(page)
+    note = page.locator("#sky-note").inner_text()
+    assert "narrow lobe" in note and "32 directional lights" in note
+    assert page.evaluate("window.explorer.narrow.A") < 20
+    page.locator("#env").fill("0")                       # no sky, no dots: nothing to say
+    assert page.locator("#sky-note").inner_text() == ""
+    page.locator("#env").fill("0.3")
+    page.select_option("#model-A", "lambertian")         # a wide lobe: nothing to say
+    page.wait_for_function("window.explorer.sides.A.name === 'lambertian' && window.explorer.data.A.plane")
+    _idle(page)
+    assert page.locator("#sky-note").inner_text() == ""
+
+
+def test_the_verdict_says_it_is_computing_from_the_first_paint(page):
+    held = []                                   # the catalogue held back: the page as first painted
+    page.route("**/api/models", lambda r: held.append(r))
+    page.goto(page.url, wait_until="domcontentloaded")
+    page.wait_for_function("document.getElementById('verdict-A') !== null")
+    assert "computing the verdict" in page.locator("#verdict-A").inner_text()
+    page.wait_for_timeout(200)
+    assert len(held) == 1
+    held[0].continue_()
+    page.unroute("**/api/models")
+    page.wait_for_function("window.explorer && window.explorer.ready", timeout=60_000)
+    page.wait_for_function("window.explorer.data.A.verdict", timeout=60_000)
+    assert "computing" not in page.locator("#verdict-A").inner_text()

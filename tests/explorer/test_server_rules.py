@@ -123,3 +123,98 @@ def test_trickling_request_heads_and_bodies_are_cut_off():
     finally:
         server.should_exit = True
         th.join(10)
+
+
+# -- issue 45 item 6: closed to the network --------------------------------------------------
+
+def test_an_empty_host_binds_loopback_and_only_a_named_address_is_exposed():
+    from plausible.explorer import resolve_host, url_of
+
+    assert resolve_host("") == ("127.0.0.1", False) and resolve_host(None) == ("127.0.0.1", False)
+    assert resolve_host("localhost") == ("localhost", False) and resolve_host("::1") == ("::1", False)
+    assert resolve_host("[::1]") == ("::1", False) and resolve_host("127.0.0.2") == ("127.0.0.2", False)
+    for named in ("0.0.0.0", "::", "192.168.1.20", "explorer.example"):
+        assert resolve_host(named) == (named, True)
+    assert url_of("", 18998) == "http://localhost:18998/" and url_of("::", 9) == "http://localhost:9/"
+
+
+def test_the_cli_binds_loopback_for_an_empty_host_and_warns_for_an_exposed_one(monkeypatch):
+    from click.testing import CliRunner
+
+    import plausible.explorer as ex
+    from plausible.cli import main
+
+    bound = []
+    monkeypatch.setattr(ex, "bind", lambda host, port: bound.append(host) or object())
+    monkeypatch.setattr(ex, "serve", lambda **kw: None)
+    r = CliRunner().invoke(main, ["explore", "--host", "", "--port", "18998", "--no-browser"])
+    assert r.exit_code == 0 and bound == ["127.0.0.1"]
+    assert "http://localhost:18998/" in r.output and "WARNING" not in r.output
+    r = CliRunner().invoke(main, ["explore", "--host", "0.0.0.0", "--port", "18998", "--no-browser"])
+    assert r.exit_code == 0 and bound[-1] == "0.0.0.0"
+    assert "WARNING" in r.output and "reachable from the network" in r.output
+
+
+def test_a_forged_loopback_host_from_another_address_is_refused():
+    ok = {"model": "lambertian"}
+    remote = TestClient(create_app(host="0.0.0.0", port=8765), base_url=LOCAL, client=("192.0.2.7", 40000))
+    for host in ("127.0.0.1:8765", "localhost:8765", "[::1]:8765"):
+        r = post(remote, "validate", ok, headers={"Host": host})
+        assert r.status_code == 403 and "192.0.2.7" in r.json()["error"]
+    local = TestClient(create_app(host="0.0.0.0", port=8765), base_url=LOCAL, client=("127.0.0.1", 40000))
+    assert post(local, "validate", ok).status_code == 200
+    exposed = TestClient(create_app(host="192.0.2.1", port=8765), base_url="http://192.0.2.1:8765",
+                         client=("192.0.2.7", 40000))
+    assert post(exposed, "validate", ok).status_code == 200      # named address, named in Host: answered
+
+
+@pytest.mark.parametrize("route", ["validate", "plane"])
+@pytest.mark.parametrize("body", [b"[" * 30000, b'{"model": "lambertian", "params": {"rd": ' + b"[" * 5000 + b"]" * 5000
+                                  + b"}}", b'{"model": "lambertian", "x": ' + b"[" * 100 + b"]" * 100 + b"}"])
+def test_deeply_nested_json_is_refused_with_422(client, route, body):
+    r = client.post(f"/api/{route}", content=body, headers={"Content-Type": "application/json"})
+    assert r.status_code == 422 and "deep" in r.json()["error"]
+
+
+def _stalled(monkeypatch, seconds):
+    """Make the slice view a pure-Python wait of ``seconds`` (stoppable)."""
+    def slow(model):
+        t = time.monotonic()
+        while time.monotonic() - t < seconds:
+            time.sleep(0.01)
+        return {}
+    monkeypatch.setattr(views, "half_diff_slice", slow)
+
+
+def test_validate_is_answered_while_heavy_requests_queue(monkeypatch):
+    _stalled(monkeypatch, 2.0)
+    c = TestClient(create_app(port=8765), base_url=LOCAL)
+    heavy = [threading.Thread(target=post, args=(c, "slice", {"model": "lambertian"})) for _ in range(3)]
+    for th in heavy:
+        th.start()
+    time.sleep(0.3)                                           # the slices hold the worker for about 6 s
+    waits = []
+    for _ in range(5):
+        t = time.monotonic()
+        assert post(c, "validate", {"model": "lambertian"}).status_code == 200
+        waits.append(time.monotonic() - t)
+    assert max(waits) < 1.0, waits
+    for th in heavy:
+        th.join(30)
+
+
+def test_heavy_requests_beyond_the_queue_get_503_with_retry_after(monkeypatch):
+    _stalled(monkeypatch, 1.5)
+    c = TestClient(create_app(port=8765, budget=Budget(queue=2)), base_url=LOCAL)
+    answers = []
+    heavy = [threading.Thread(target=lambda: answers.append(post(c, "slice", {"model": "lambertian"})))
+             for _ in range(2)]
+    for th in heavy:
+        th.start()
+    time.sleep(0.3)
+    r = post(c, "plane", {"model": "lambertian"})
+    assert r.status_code == 503 and int(r.headers["Retry-After"]) >= 1 and "at most 2" in r.json()["error"]
+    for th in heavy:
+        th.join(30)
+    assert [a.status_code for a in answers] == [200, 200]
+    assert post(c, "plane", {"model": "lambertian"}).status_code == 200    # the queue drained

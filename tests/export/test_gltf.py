@@ -124,3 +124,45 @@ def test_the_validator_reports_a_broken_file(tmp_path, how, code):
     issues = validate(path)["issues"]
     assert issues["numErrors"] > 0
     assert code in [m["code"] for m in issues["messages"] if m["severity"] == 0]
+
+
+# -- KHR_materials_ior -------------------------------------------------------------------
+
+def _f0(ior):
+    return 1.0 if ior == 0 else ((ior - 1) / (ior + 1)) ** 2
+
+
+@pytest.mark.parametrize("ior,color", [(1.33, [1.0, 0.5, 2.0]), (2.42, 1.0), (1.0, 3.0), (0.0, [0.2, 0.6, 1.0]),
+                                       (4.0, 20.0)])
+def test_an_ior_material_is_written_with_the_extension_and_read_back_exactly(tmp_path, ior, color):
+    from plausible.export.gltf import read_gltf_materials
+
+    given = {"base_color": [0.2, 0.4, 0.6], "roughness": 0.35, "specular": 0.7, "specular_color": color, "ior": ior}
+    path = write_gltf({"m": given}, tmp_path / "ior.gltf")
+    mat = json.loads(path.read_text())["materials"][0]
+    assert mat["extensions"]["KHR_materials_ior"] == {"ior": ior}
+    assert np.allclose(mat["extensions"]["KHR_materials_specular"]["specularColorFactor"], color)
+    model = read_gltf_materials(path)["m"]
+    # the extension's dielectric f0, min(F0(ior) specularColor, 1) specular, written out here: the model's
+    # specular_color = that f0 / (0.04 specular) (the equivalence of docs/models/gltf-pbr.md)
+    f0 = np.minimum(_f0(ior) * np.broadcast_to(color, (3,)), 1.0) * 0.7
+    np.testing.assert_allclose(np.minimum(0.04 * np.broadcast_to(model.params["specular_color"], (3,)), 1) * 0.7,
+                               f0, rtol=1e-14)
+    issues = validate(path)["issues"]
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
+
+
+def test_reading_a_file_gives_each_extension_and_the_defaults():
+    from plausible.export.gltf import material_model
+
+    m = material_model({"name": "x", "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.5,
+                                                                                 "anisotropyRotation": 4.0}}})
+    p = m.params
+    assert (p["metallic"], p["roughness"], p["specular"]) == (1.0, 1.0, 1.0)    # glTF's defaults
+    assert p["anisotropy_rotation"] == pytest.approx(4.0 - np.pi, abs=1e-15)     # a half turn changes nothing
+    for doc in MATERIALS.values():
+        back, want = material_model(gltf_document({"m": doc})["materials"][0]), plausible.make("gltf-pbr", **doc)
+        wi, wo = np.array([[0.3, 0.1, 0.95], [0.0, 0.6, 0.8]]), np.array([[-0.2, 0.4, 0.89], [0.5, -0.5, 0.71]])
+        np.testing.assert_array_equal(back.eval(wi, wo), np.broadcast_to(want.eval(wi, wo).reshape(2, -1), (2, 3)))
+    with pytest.raises(ValueError, match=r"material 'bad': KHR_materials_ior: ior must be 0 or lie in \[1, inf\)"):
+        material_model({"name": "bad", "extensions": {"KHR_materials_ior": {"ior": 0.5}}})

@@ -7,7 +7,9 @@ NumPy backend on the analytic sphere.
 Reference: for each pixel the camera ray (the page's own camera matrices),
 its hit on the unit sphere, the frame (normal; tangent along the sphere's
 texture coordinate ``u``, which is what ``computeTangents`` gives; bitangent
-``n x t``), and ``f(wi, wo) cos(theta_i) L`` of NumPy, in 8 bits.  The page
+``n x t``), and ``f(wi, wo) cos(theta_i) L`` of NumPy times the page's exposure,
+in 8-bit sRGB (:func:`plausible.figures.scenes.tonemap`, the IEC 61966-2-1
+encoding written independently of the page's GLSL).  The page
 draws a tessellated sphere (256 x 128 segments), whose interpolated normals
 and positions differ from the analytic ones by about 1e-4 rad (0.02 pixel);
 criterion (:func:`agree`): every pixel away from the outline and the poles
@@ -28,6 +30,7 @@ import pytest
 
 import plausible
 from plausible.export import to_js
+from plausible.figures.scenes import tonemap
 
 pytest.importorskip("playwright.sync_api")
 from glsl_cases import RTOL, direction_pairs, relative_errors  # noqa: E402
@@ -92,8 +95,9 @@ def page():
     pw.stop()
 
 
-READ = """() => {
-  const { renderer, scene, camera, light } = window.example;
+READ = """(stops) => {
+  const { renderer, scene, camera, light, uniforms, setExposure } = window.example;
+  setExposure(stops);
   renderer.render(scene, camera);
   const gl = renderer.getContext();
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
@@ -104,18 +108,19 @@ READ = """() => {
   const mesh = scene.children[0];
   return { w, h, data: btoa(s), world: camera.matrixWorld.elements, projInv: camera.projectionMatrixInverse.elements,
            light: light.direction.toArray(), radiance: light.radiance.toArray(),
-           radius: mesh.geometry.parameters.radius, mesh: mesh.matrixWorld.elements };
+           radius: mesh.geometry.parameters.radius, mesh: mesh.matrixWorld.elements,
+           exposure: uniforms.exposure.value };
 }"""
 
 
-def render(page, module_text):
-    """The page with ``brdf.js`` = ``module_text``: its pixels (rows bottom-up, RGB
-    0-255) and its camera and light."""
+def render(page, module_text, stops=0.0):
+    """The page with ``brdf.js`` = ``module_text`` at ``stops`` EV of exposure: its
+    pixels (rows bottom-up, RGB 0-255) and its camera, light and exposure."""
     page.state["module"] = module_text
     page.errors.clear()
     page.goto(ORIGIN + "index.html")
     page.wait_for_function("window.example !== undefined", timeout=60000)
-    r = page.evaluate(READ)
+    r = page.evaluate(READ, stops)
     px = np.frombuffer(base64.b64decode(r["data"]), dtype=np.uint8).reshape(r["h"], r["w"], 4)
     return px[..., :3].astype(int), r
 
@@ -153,7 +158,7 @@ def reference(model, r, swap_xy=False, offset=(0.0, 0.0)):
     f = model._eval_block(wi, wo, (len(wi),))
     f = np.broadcast_to(f[:, None] if f.ndim == 1 else f, (len(wi), 3))
     rgb = f * np.maximum(wi[:, 2], 0.0)[:, None] * np.array(r["radiance"])
-    want = np.clip(np.round(rgb * 255.0), 0, 255)
+    want = tonemap(rgb, r.get("exposure", 1.0)).astype(float)
     keep = hit & (wo[:, 2] > 0.2) & (np.abs(p[:, 1]) < 0.97)
     return want.reshape(h, w, 3), keep.reshape(h, w)
 
@@ -194,6 +199,20 @@ def test_the_three_js_example_page_renders_what_numpy_computes(page, label, mode
     assert keep.sum() > 0.3 * keep.size and want[keep].max() > 100      # the sphere, lit
     ok, within1, excess = agree(got, model, r)
     assert ok and within1 > 0.99, (label, within1, excess)
+
+
+def test_the_page_writes_srgb_and_its_exposure_control_scales_the_radiance(page):
+    """The canvas holds sRGB of radiance x 2^EV: at -2 EV and +1.5 EV the pixels
+    match NumPy's; the linear values of the old page (no encoding) do not."""
+    m = plausible.make("modified-phong", n=200.0, ks=0.3)
+    for stops in (-2.0, 1.5):
+        got, r = render(page, to_js(m), stops)
+        assert r["exposure"] == 2.0 ** stops and page.errors == []
+        ok, within1, excess = agree(got, m, r)
+        assert ok and within1 > 0.99, (stops, within1, excess)
+    linear = dict(r, exposure=1.0)
+    want, keep = reference(m, linear)
+    assert np.mean(np.abs(got - want)[keep] > 8) > 0.5       # sRGB at +1.5 EV is not the linear picture
 
 
 def test_the_comparison_sees_an_unset_uniform_and_a_turned_frame(page):

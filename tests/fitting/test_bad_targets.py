@@ -12,7 +12,7 @@ from click.testing import CliRunner
 import plausible
 from plausible.cli import main
 from plausible.fitting import as_target, load_table
-from plausible.models.merl import NCELLS, RES, write_merl
+from plausible.models.merl import NCELLS, RES, read_merl, write_merl
 
 HEADER = "wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,f\n"
 GOOD = "0,0,1,0.6,0,0.8,0.3\n"
@@ -141,3 +141,29 @@ def test_cli_fit_prints_a_bracketed_file_name(tmp_path):
     r = CliRunner().invoke(main, ["fit", "lambertian", "--target", str(p), "--starts", "1"])
     assert r.exit_code == 0, r.output
     assert "samples[red].csv" in r.output
+
+
+LFS = ("version https://git-lfs.github.com/spec/v1\n"
+       "oid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 33554444\n")
+
+
+@pytest.mark.parametrize("name", ["gold.binary", "gold.csv", "gold"])
+def test_a_git_lfs_pointer_target_says_it_is_one(tmp_path, name):
+    p = _csv(tmp_path, LFS, name)
+    r = CliRunner().invoke(main, ["fit", "ward", "--target", str(p), "--time-limit", "1"])
+    assert r.exit_code == 2 and "Traceback" not in r.output
+    assert "Git LFS pointer" in r.output and "33554444 bytes" in r.output and "git lfs pull" in r.output
+    for read in (read_merl, load_table):
+        with pytest.raises(ValueError, match="Git LFS pointer"):
+            read(p)
+
+
+def test_a_merl_header_of_another_resolution_is_named(tmp_path):
+    p = tmp_path / "odd.binary"
+    p.write_bytes(np.array([90, 90, 360], "<i4").tobytes() + b"\xff" * 64)
+    with pytest.raises(ValueError, match=r"starts like a MERL file of another resolution: header dimensions "
+                                         r"\(90, 90, 360\), expected \(90, 90, 180\)"):
+        as_target(p)
+    p.write_bytes(b"\xff\xfe" * 32)                         # binary, nothing like a MERL header
+    with pytest.raises(ValueError, match=r"a MERL file starts with the header 90 90 180"):
+        as_target(p)

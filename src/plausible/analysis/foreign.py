@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..directions import CHUNK, as_directions, as_unit_interval
+from ..directions import CHUNK, as_directions, as_unit_interval, batch_shape
 from ..vec import HORIZON
 
 
@@ -33,7 +33,7 @@ class ForeignBxDF:
         """``(wi rows, wo rows, shape)``: both validated, broadcast and flattened."""
         wi = self._directions("wi", wi)
         wo = self._directions("wo", wo)
-        shape = np.broadcast_shapes(wi.shape, wo.shape)[:-1]
+        shape = batch_shape(wi=wi, wo=wo)
         return (np.broadcast_to(wi, shape + (3,)).reshape(-1, 3), np.broadcast_to(wo, shape + (3,)).reshape(-1, 3),
                 shape)
 
@@ -41,7 +41,7 @@ class ForeignBxDF:
         """``(wi rows, u rows, shape)`` of ``sample``, contiguous."""
         wi = self._directions("wi", wi)
         u = as_unit_interval(u)
-        shape = np.broadcast_shapes(wi.shape, u.shape)[:-1]
+        shape = batch_shape(wi=wi, u=u)
         return (np.ascontiguousarray(np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)),
                 np.ascontiguousarray(np.broadcast_to(u, shape + (3,)).reshape(-1, 3)), shape)
 

@@ -28,7 +28,6 @@ model names means, and the derivation of each mapping, is in ``docs/materials.md
 
 from __future__ import annotations
 
-import difflib
 import re
 from dataclasses import dataclass
 from functools import lru_cache
@@ -46,6 +45,7 @@ from ..models.published import AshikhminShirleyDielectric, CookTorranceWide, Nga
 from ..models.sum import Sum
 from ..models.ward import Ward
 from ..arrays.ops import PI
+from ..text import closest
 
 NGAN = "A. Ngan, F. Durand, W. Matusik, Experimental analysis of BRDF models, EGSR 2005"
 LOW = ("J. Löw, J. Kronander, A. Ynnerman, J. Unger, BRDF models for accurate and efficient "
@@ -207,7 +207,8 @@ def fit_data(key: str) -> dict:
 # -- lookup ---------------------------------------------------------------------------
 
 def suggest(word: str, options) -> str:
-    close = difflib.get_close_matches(word, list(options), n=5, cutoff=0.5)
+    """``"; did you mean A, B?"`` for the options closest to ``word`` (:func:`plausible.text.closest`), else ``""``."""
+    close = closest(word, options)
     return f"; did you mean {', '.join(close)}?" if close else ""
 
 

@@ -24,6 +24,22 @@ def create_app(host=None, port=None):
     return _create(host, port)
 
 
+def resolve_host(host: str | None) -> tuple:
+    """``(address to bind, exposed)`` for the ``--host`` a user gave: an empty
+    or missing host binds the loopback ``127.0.0.1``; ``exposed`` is True only
+    when the user named an address other machines can reach (``0.0.0.0``,
+    ``::``, a LAN address, a host name that is not ``localhost``), and then
+    whoever serves must say so loudly (the CLI does)."""
+    from .app import _is_loopback
+
+    host = (host or "").strip()
+    if not host:
+        return "127.0.0.1", False
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    return host, not _is_loopback(host)
+
+
 def bind(host: str = "127.0.0.1", port: int = 8765):
     """A listening socket on ``host:port`` (as uvicorn binds it), or ValueError
     saying the port is taken: bound *before* the URL is announced, so a busy
@@ -45,7 +61,12 @@ def bind(host: str = "127.0.0.1", port: int = 8765):
 
 
 def url_of(host: str, port: int) -> str:
-    return f"http://{'localhost' if host in ('127.0.0.1', '::1') else host}:{port}/"
+    """The URL to open for a server bound to ``host:port`` (``localhost`` for
+    loopback or an empty host, brackets around an IPv6 address)."""
+    host = (host or "").strip("[]")
+    if host in ("", "127.0.0.1", "::1", "0.0.0.0", "::"):
+        host = "localhost"
+    return f"http://{f'[{host}]' if ':' in host else host}:{port}/"
 
 
 def serve(host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True, sock=None) -> None:
@@ -57,6 +78,7 @@ def serve(host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True, 
 
     import uvicorn
 
+    host, _ = resolve_host(host)
     sock = sock if sock is not None else bind(host, port)
     if open_browser:
         threading.Timer(1.0, lambda: webbrowser.open(url_of(host, port))).start()
@@ -67,4 +89,4 @@ def serve(host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True, 
 
 
 __all__ = ["albedo", "bind", "build", "create_app", "export", "half_diff_slice", "lobe3d", "model_catalogue", "plane",
-           "serve", "shader", "verdict"]
+           "resolve_host", "serve", "shader", "url_of", "verdict"]

@@ -17,16 +17,26 @@ The rules of the server (:class:`Budget`; docs/explorer.md):
   rebound DNS name;
 * a body is at most :attr:`Budget.body_bytes` and must arrive within
   :attr:`Budget.body_seconds` (413, 408); it must be a JSON object (422);
+* a request naming this machine (a loopback ``Host``) must come from this
+  machine: one from another address that forges ``Host: 127.0.0.1:PORT`` is
+  refused (403), which matters once ``--host`` exposes the server;
+* a body nested deeper than :attr:`Budget.depth` (``[`` x 30000 fits in 64 KiB)
+  is refused with 422, not a ``RecursionError``;
 * the views run in one worker thread, off the event loop, one at a time (the
   computations share Dr.Jit's state); a request still running
   :attr:`Budget.seconds` after the worker took it up is stopped and answered
-  503 with the budget, while the server keeps answering other requests.
+  503 with the budget, while the server keeps answering other requests; at
+  most :attr:`Budget.queue` requests wait for it (beyond: 503 with
+  ``Retry-After``);
+* the cheap request (``/api/validate``: build the model, say it is valid) has
+  its own lane (a second worker), so it never waits behind queued views.
 """
 
 from __future__ import annotations
 
 import asyncio
 import ctypes
+import ipaddress
 import json
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -59,6 +69,10 @@ class Budget:
     header_seconds: float = 10.0
     #: Connections served at once (beyond: 503; :func:`server_config`).
     connections: int = 64
+    #: Heavy requests waiting for the worker (beyond: 503 with ``Retry-After``).
+    queue: int = 8
+    #: Deepest nesting of lists and objects in a request body (beyond: 422).
+    depth: int = 32
 
 
 class OverBudget(Exception):
@@ -66,9 +80,10 @@ class OverBudget(Exception):
 
 
 class HttpError(Exception):
-    def __init__(self, status: int, message: str):
+    def __init__(self, status: int, message: str, retry_after: float | None = None):
         super().__init__(message)
         self.status = status
+        self.retry_after = retry_after
 
 
 def _raise_in(thread_id: int, exc) -> None:
@@ -84,14 +99,27 @@ class Worker:
     :class:`OverBudget` in that thread (a long NumPy or Dr.Jit call finishes
     first)."""
 
-    def __init__(self):
-        self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="plausible-explorer")
+    def __init__(self, queue: int | None = None, name: str = "plausible-explorer"):
+        self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
         self.lock = threading.Lock()
         self.current = None     # (job, thread id) while a job runs
+        self.queue = queue      # most calls waiting for their turn (None: no limit)
+        self.waiting = 0
 
     async def run(self, fn, seconds: float):
         """``fn()`` in the worker; its budget of ``seconds`` starts when it starts
-        (a request waiting behind another one waits for its turn)."""
+        (a request waiting behind another one waits for its turn; 503 with
+        ``Retry-After`` when ``queue`` requests already wait)."""
+        if self.queue is not None and self.waiting >= self.queue:
+            raise HttpError(503, f"{self.waiting} requests already in the worker (running or waiting; at most "
+                                 f"{self.queue}): try again shortly", retry_after=max(1.0, seconds / 10))
+        self.waiting += 1
+        try:
+            return await self._run(fn, seconds)
+        finally:
+            self.waiting -= 1
+
+    async def _run(self, fn, seconds: float):
         job = object()
         loop = asyncio.get_running_loop()
         started = asyncio.Event()
@@ -129,16 +157,43 @@ def _allowed_hosts(host: str | None, port: int | None) -> set:
     return names
 
 
-def _host_ok(value: str, names: set, port: int | None) -> bool:
-    """``value`` is ``name`` or ``name:port`` with ``name`` in ``names`` and the port the served one."""
+def _split_host(value: str) -> tuple:
+    """``(name, port or None)`` of a ``Host`` value (``name``, ``name:port``, ``[v6]:port``)."""
     value = value.strip().lower()
     if value.startswith("["):
         name, _, rest = value.partition("]")
-        name += "]"
-        p = rest[1:] if rest.startswith(":") else None
-    else:
-        name, _, p = value.partition(":")
-        p = p or None
+        return name + "]", (rest[1:] if rest.startswith(":") else None)
+    name, _, p = value.partition(":")
+    return name, (p or None)
+
+
+def _is_loopback(address: str | None) -> bool:
+    """Whether ``address`` (an IP address, ``[v6]`` or ``localhost``) is this machine's loopback."""
+    a = (address or "").strip("[]").lower()
+    if a == "localhost":
+        return True
+    try:
+        ip = ipaddress.ip_address(a)
+    except ValueError:
+        return False
+    return ip.is_loopback or (getattr(ip, "ipv4_mapped", None) is not None and ip.ipv4_mapped.is_loopback)
+
+
+def _from_network(client) -> bool:
+    """Whether the peer ``client`` (``request.client``) is another machine: an
+    IP address that is not loopback (an in-process test client or a Unix socket
+    has no IP address)."""
+    host = getattr(client, "host", None)
+    try:
+        ipaddress.ip_address(host or "")
+    except ValueError:
+        return False
+    return not _is_loopback(host)
+
+
+def _host_ok(value: str, names: set, port: int | None) -> bool:
+    """``value`` is ``name`` or ``name:port`` with ``name`` in ``names`` and the port the served one."""
+    name, p = _split_host(value)
     if name not in names:
         return False
     if port is None:
@@ -155,6 +210,9 @@ def _guard(app, names, port):
         if not _host_ok(h, names, port):
             return JSONResponse({"error": f"Host {h!r} refused: the explorer answers requests to "
                                           f"{' or '.join(sorted(names))} on its own port only"}, status_code=403)
+        if _is_loopback(_split_host(h)[0]) and _from_network(request.client):
+            return JSONResponse({"error": f"Host {h!r} refused: it names this machine but the request comes "
+                                          f"from {request.client.host}"}, status_code=403)
         origin = request.headers.get("origin")
         if origin is not None:
             scheme, _, rest = origin.partition("://")
@@ -169,7 +227,20 @@ def _guard(app, names, port):
 
     @app.exception_handler(HttpError)
     async def http_error(request: Request, exc: HttpError):
-        return JSONResponse({"error": str(exc)}, status_code=exc.status)
+        headers = {"Retry-After": f"{exc.retry_after:.0f}"} if exc.retry_after else None
+        return JSONResponse({"error": str(exc)}, status_code=exc.status, headers=headers)
+
+
+def _check_depth(body, most: int) -> None:
+    """ValueError if ``body`` nests lists or objects deeper than ``most`` (walked
+    without recursion)."""
+    stack = [(body, 1)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, (list, dict)):
+            if d > most:
+                raise ValueError(f"request body nests lists or objects more than {most} deep")
+            stack.extend((x, d + 1) for x in (v.values() if isinstance(v, dict) else v))
 
 
 async def _body_of(request: Request, budget: Budget) -> dict:
@@ -195,6 +266,9 @@ async def _body_of(request: Request, budget: Budget) -> dict:
         body = json.loads(b"".join(chunks) or b"null")
     except (ValueError, UnicodeDecodeError) as e:
         raise ValueError(f"request body must be JSON: {e}") from None
+    except RecursionError:
+        raise ValueError(f"request body nests lists or objects more than {budget.depth} deep") from None
+    _check_depth(body, budget.depth)
     if not isinstance(body, dict) or "model" not in body:
         raise ValueError('request body must be {"model": NAME, "params": {...}}')
     params = body.get("params")
@@ -230,7 +304,8 @@ def create_app(host: str | None = None, port: int | None = None, budget: Budget 
     app = FastAPI(title="plausible explorer", docs_url=None, redoc_url=None, openapi_url=None)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     catalogue = views.model_catalogue()
-    worker = Worker()
+    worker = Worker(queue=budget.queue)
+    lane = Worker(queue=budget.queue, name="plausible-explorer-cheap")     # /api/validate: never behind views
     names = _allowed_hosts(host, port)
     app.state.budget = budget
 
@@ -255,18 +330,18 @@ def create_app(host: str | None = None, port: int | None = None, budget: Budget 
         "shader": lambda m, b: views.shader(m, prefix=_text(b, "prefix", "m0")),
     }
 
-    async def compute(request: Request, view):
+    async def compute(request: Request, view, on=worker):
         body = await _body_of(request, budget)
-        return await worker.run(lambda: view(views.build(body["model"], body.get("params") or {}), body),
-                                budget.seconds)
+        return await on.run(lambda: view(views.build(body["model"], body.get("params") or {}), body),
+                            budget.seconds)
 
-    def route(view):
+    def route(view, on):
         async def answer(request: Request):
-            return await compute(request, view)
+            return await compute(request, view, on)
         return answer
 
     for name, view in routes.items():
-        app.post(f"/api/{name}", name=name)(route(view))
+        app.post(f"/api/{name}", name=name)(route(view, lane if name == "validate" else worker))
 
     @app.post("/api/export")
     async def export(request: Request):

@@ -5,9 +5,16 @@ References
 * The Khronos 3D Formats Working Group, *glTF 2.0 Specification* (sections
   "Buffers and Buffer Views", "Accessors", "Meshes", "Materials"; embedded buffers as
   ``data:application/octet-stream;base64`` URIs).
-* Khronos, *KHR_materials_specular* (``specularFactor``, ``specularColorFactor``) and
+* Khronos, *KHR_materials_specular* (``specularFactor``, ``specularColorFactor``),
   *KHR_materials_anisotropy* (``anisotropyStrength``, ``anisotropyRotation``; a mesh using
-  it MUST have ``NORMAL`` and ``TANGENT`` attributes).
+  it MUST have ``NORMAL`` and ``TANGENT`` attributes) and *KHR_materials_ior* (``ior``,
+  default 1.5; ``f0 = ((ior - 1)/(ior + 1))^2``; 0 means an infinite ior).
+
+``KHR_materials_ior``: a material given with an ``"ior"`` entry (besides the model's
+parameters) is written with the extension and its ``specularColorFactor`` as given; the model
+it stands for has ``specular_color = min(F0(ior) specular_color, 1) / 0.04``
+(:func:`plausible.models.gltf_pbr.specular_color_of_ior`), the same dielectric ``f0``
+exactly.  :func:`read_gltf_materials` reads a file's materials back into models the same way.
 
 The parameters of :mod:`plausible.models.gltf_pbr` are the glTF factors themselves, so a
 material is written as it is, with no conversion: ``base_color`` -> ``baseColorFactor``
@@ -42,7 +49,8 @@ import numpy as np
 
 from .. import registry
 
-__all__ = ["TEXTURE_SLOTS", "gltf_document", "gltf_material", "image_uri", "sphere", "write_gltf"]
+__all__ = ["TEXTURE_SLOTS", "gltf_document", "gltf_material", "image_uri", "material_model", "read_gltf_materials",
+           "sphere", "write_gltf"]
 
 #: glTF's numbers for the types the file uses.
 _FLOAT, _UNSIGNED_SHORT = 5126, 5123
@@ -53,7 +61,10 @@ SPACING = 2.5
 
 
 def _model(name: str, params):
-    """``params`` as a validated ``gltf-pbr`` model (a model given is checked to be one)."""
+    """``params`` as a validated ``gltf-pbr`` model (a model given is checked to be one);
+    an ``"ior"`` entry folded into ``specular_color`` (module docstring)."""
+    from ..models.gltf_pbr import specular_color_of_ior
+
     cls = registry.info("gltf-pbr").cls
     if isinstance(params, cls):
         return params
@@ -61,6 +72,12 @@ def _model(name: str, params):
         raise ValueError(f"material {name!r}: parameters must be a dict of gltf-pbr parameters or a "
                          f"gltf-pbr model, got {type(params).__name__}")
     try:
+        if "ior" in params:
+            params = dict(params)
+            ior = params.pop("ior")
+            if isinstance(ior, bool) or not isinstance(ior, (int, float)):
+                raise ValueError(f"KHR_materials_ior: ior must be a number, got {ior!r}")
+            params["specular_color"] = specular_color_of_ior(ior, params.get("specular_color", 1.0))
         return cls(**params)
     except ValueError as err:
         raise ValueError(f"material {name!r}: {err}") from None
@@ -75,6 +92,9 @@ def gltf_material(name: str, params) -> dict:
     """The glTF material object of one ``gltf-pbr`` material (``params``: a dict of its
     parameters or the model); ValueError naming the material and the parameter for bad values."""
     p = _model(name, params).params
+    ior = params.get("ior", 1.5) if isinstance(params, dict) else 1.5
+    if ior != 1.5:      # the factor as the user gave it, relative to this ior
+        p = dict(p, specular_color=params.get("specular_color", 1.0))
     mat = {"name": str(name),
            "pbrMetallicRoughness": {"baseColorFactor": _rgb(p["base_color"]) + [1.0],
                                     "metallicFactor": float(p["metallic"]),
@@ -86,9 +106,44 @@ def gltf_material(name: str, params) -> dict:
     if p["anisotropy_strength"] != 0.0:
         ext["KHR_materials_anisotropy"] = {"anisotropyStrength": float(p["anisotropy_strength"]),
                                            "anisotropyRotation": float(p["anisotropy_rotation"])}
+    if ior != 1.5:
+        ext["KHR_materials_ior"] = {"ior": float(ior)}
     if ext:
         mat["extensions"] = ext
     return mat
+
+
+def material_model(mat: dict):
+    """The ``gltf-pbr`` model of one glTF material object (the inverse of
+    :func:`gltf_material`): the ``pbrMetallicRoughness`` factors and the
+    extensions KHR_materials_specular, KHR_materials_anisotropy and
+    KHR_materials_ior (folded into ``specular_color``, exactly), each at its
+    default where absent; textures are not read.  ValueError naming the material
+    and the parameter for values outside the model's ranges."""
+    name = mat.get("name", "material")
+    pbr = mat.get("pbrMetallicRoughness", {})
+    ext = mat.get("extensions", {})
+    spec = ext.get("KHR_materials_specular", {})
+    aniso = ext.get("KHR_materials_anisotropy", {})
+    params = {"base_color": list(pbr.get("baseColorFactor", [1.0, 1.0, 1.0, 1.0]))[:3],
+              "metallic": pbr.get("metallicFactor", 1.0), "roughness": pbr.get("roughnessFactor", 1.0),
+              "specular": spec.get("specularFactor", 1.0),
+              "specular_color": list(spec.get("specularColorFactor", [1.0, 1.0, 1.0])),
+              "anisotropy_strength": aniso.get("anisotropyStrength", 0.0),
+              "anisotropy_rotation": aniso.get("anisotropyRotation", 0.0) % math.pi}
+    if "KHR_materials_ior" in ext:
+        params["ior"] = ext["KHR_materials_ior"].get("ior", 1.5)
+    return _model(name, params)
+
+
+def read_gltf_materials(path) -> dict:
+    """``{name: gltf-pbr model}`` of every material of a ``.gltf`` file (JSON;
+    :func:`material_model`); unnamed materials are called ``material N``."""
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    out = {}
+    for k, mat in enumerate(doc.get("materials", [])):
+        out[mat.get("name") or f"material {k}"] = material_model(mat)
+    return out
 
 
 def sphere(rings: int = 32, segments: int = 64):

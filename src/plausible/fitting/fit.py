@@ -638,7 +638,22 @@ def _free_params(info, proto, fixed, tgt):
 
 def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
     """Every metric's figure of ``model`` against ``target`` (albedo by the
-    accurate integrator :func:`plausible.analysis.albedo_curve`)."""
+    accurate integrator :func:`plausible.analysis.albedo_curve`).
+
+    Returns
+    -------
+    dict with two keys:
+
+    ``"errors"``
+        the dict of :func:`plausible.fitting.metrics.errors`: ``l2-cos``,
+        ``log``, ``perceptual``, ``fcos_max`` (``E_f``) and ``albedo_max``
+        (``E_a``; None, and ``perceptual`` the ``fcos`` figure alone, when the
+        target has no albedo);
+    ``"albedo"``
+        the model's directional albedo at the target's ``thetas`` (an array,
+        channel-averaged to the target's shape), or None without a target albedo.
+
+    Example: ``evaluate_fit(fit.model, "material:nickel@ngan2005/ward")["errors"]["log"]``."""
     tgt = as_target(target)
     f = _fcos(model.eval(tgt.wi, tgt.wo), tgt.wo)
     g = tgt.fcos

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import textwrap
 import math
 from pathlib import Path
 
@@ -11,7 +10,7 @@ import numpy as np
 
 from ..analysis import albedo_curve, direction
 from ..text import jsonable, write_atomic
-from ..plotting import _plt, default_thetas, plot_albedo_curves, save_figure
+from ..plotting import _figure, _legend_below, _wrap, default_thetas, plot_albedo_curves, save_figure
 
 PLANE_THETAS_DEG = (0.0, 30.0, 60.0, 75.0)
 
@@ -26,8 +25,7 @@ def plot_plane(result, path, thetas_deg=PLANE_THETAS_DEG, n: int = 361):
     incidence, against the signed outgoing angle (negative: the side of the
     light), one colour per incidence angle, log scale; channel means.  A table
     target is drawn as its samples lying in the plane of incidence."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
+    fig, ax = _figure((len(thetas_deg) * 2 + 1) // 2 + 1)
     to = np.radians(np.linspace(-89.5, 89.5, n))
     wo = np.stack([np.sin(to), np.zeros_like(to), np.cos(to)], -1)
     tgt = result.target
@@ -54,10 +52,9 @@ def plot_plane(result, path, thetas_deg=PLANE_THETAS_DEG, n: int = 361):
         ax.set_ylim(1e-4 * top, 2 * top)
     ax.set_xlabel("outgoing angle in the plane of incidence (degrees)")
     ax.set_ylabel("f cos(theta_o)")
-    ax.set_title(textwrap.fill(f"{result.model.name} fitted ({result.metric}) to {tgt.label}", 80), fontsize=8)
+    ax.set_title(_wrap(f"{result.model.name} fitted ({result.metric}) to {tgt.label}", 90), fontsize=8)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
+    _legend_below(fig, ax, fontsize=7, ncol=2)
     return save_figure(fig, path)
 
 

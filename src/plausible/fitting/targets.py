@@ -45,6 +45,11 @@ def load_table(path):
     than the first, or a file that is not UTF-8 text raises ValueError naming
     the file and line.
     """
+    from ..models.merl import not_data
+
+    stand_in = not_data(path)
+    if stand_in:
+        raise ValueError(stand_in)
     rows, width, header = [], None, False
     try:
         with open(path, encoding="utf-8-sig") as fh:     # (a byte-order mark is not part of the first row)
@@ -70,8 +75,7 @@ def load_table(path):
                 _check_row(where, row)
                 rows.append(row)
     except UnicodeDecodeError as e:
-        raise ValueError(f"{path}: not a CSV text table (byte {e.start} is not UTF-8; a MERL file starts with "
-                         f"the header 90 90 180)") from None
+        raise ValueError(f"{path}: not a CSV text table (byte {e.start} is not UTF-8){_binary_note(path)}") from None
     if not rows:
         raise ValueError(f"{path}: no samples")
     a = np.array(rows)
@@ -98,6 +102,18 @@ def _check_row(where, row):
         if v > F_MAX:
             raise ValueError(f"{where}: column {name} (the BRDF value) must lie in [0, {F_MAX:g}] "
                              f"(the metrics square it), got {v:g}")
+
+
+def _binary_note(path) -> str:
+    """For a binary file that is not a table: what its first 12 bytes say as a
+    MERL header (``; a MERL file starts with ...``)."""
+    from ..models.merl import RES, _header_note
+
+    with open(path, "rb") as fh:
+        dims = np.frombuffer(fh.read(12).ljust(12, b"\0"), dtype="<i4")
+    if all(0 < int(d) <= 4096 for d in dims):
+        return f"; it starts like a MERL file of another resolution: {_header_note(dims)}"
+    return f"; a MERL file starts with the header {' '.join(map(str, RES))} (little-endian int32)"
 
 
 def _clip(text, n=60):

@@ -55,6 +55,25 @@ reflects ``1 - ln 2 = 0.307``).
 So the registry entry says ``energy_conserving=False``.  The model is reciprocal
 (``D``, ``Vis`` and every Fresnel term are symmetric in ``V`` and ``L``).
 
+The viewer's behaviour (``viewer="true"``).  Khronos' glTF-Sample-Renderer
+(``source/Renderer/shaders/brdf.glsl`` and ``pbr.frag``) departs from the text
+in three places; ``viewer="true"`` computes what it shows:
+
+* the dielectric mixes per channel, ``mix(diffuse, specular, F_d)``, so the
+  diffuse weight is ``1 - F_d`` per channel instead of ``1 - max_value(F_d)``
+  (differs only with a coloured ``specularColor``);
+* where anisotropy is on (``anisotropy_strength > 0``; the viewer's
+  ``BRDF_specularGGXAnisotropy``) ``Vis`` is clamped to 1 and
+* ``alpha_b = clamp(alpha, 0.001, 1)`` there.
+The Fresnel weight, ``D`` and ``alpha_t`` are the same.
+
+``KHR_materials_ior`` (``f0 = ((ior - 1)/(ior + 1))^2`` in place of 0.04;
+``ior = 0`` means ``f0 = 1``) needs no parameter of its own: with
+KHR_materials_specular the dielectric ``f0`` is ``min(F0(ior) specularColor, 1)
+specular``, which is exactly this model's with ``specular_color =
+min(F0(ior) specularColor, 1) / 0.04`` (:func:`specular_color_of_ior`; at most
+25, inside the parameter's range).
+
 Sampling: a one-sample mixture of the specular lobe (GGX visible normals,
 Heitz 2018, reflected; ``pdf = D / (2 (wi.z + |wi~|))``) and the diffuse lobe
 (cosine-weighted), chosen in proportion to estimates of their albedos at ``wi``.
@@ -75,6 +94,32 @@ from ..vec import HORIZON, above
 
 #: The dielectric reflectance at normal incidence of ``ior = 1.5``: ``((1 - 1.5) / (1 + 1.5))^2``.
 DIELECTRIC_F0 = 0.04
+#: ``viewer``: the specification's formulas, or glTF-Sample-Renderer's (module docstring).
+VIEWER = ("false", "true")
+#: glTF-Sample-Renderer's floor on ``alpha_b`` where anisotropy is on (``clamp(alpha, 0.001, 1)``).
+VIEWER_ALPHA_B_MIN = 0.001
+
+
+def ior_f0(ior):
+    """``((ior - 1) / (ior + 1))^2`` (KHR_materials_ior, outside ior 1); ``ior = 0``
+    is the extension's specular-glossiness mode, an infinite ior: 1."""
+    ior = np.asarray(ior, dtype=np.float64)
+    return np.where(ior == 0.0, 1.0, ((ior - 1.0) / (ior + 1.0)) ** 2)
+
+
+def specular_color_of_ior(ior, specular_color=1.0):
+    """The ``specular_color`` of this model that gives the dielectric ``f0`` of a
+    glTF material with ``KHR_materials_ior.ior`` and
+    ``KHR_materials_specular.specularColorFactor`` = ``specular_color``:
+    ``min(F0(ior) specular_color, 1) / 0.04`` (exact: both models then compute
+    ``min(., 1) specular``, :func:`ior_f0`).  ValueError for an ior that is
+    neither 0 nor at least 1."""
+    ior = float(ior)
+    if not (ior == 0.0 or 1.0 <= ior < math.inf):
+        raise ValueError(f"KHR_materials_ior: ior must be 0 or lie in [1, inf), got {ior:g}")
+    c = np.asarray(specular_color, dtype=np.float64)
+    out = np.minimum(ior_f0(ior) * c, 1.0) / DIELECTRIC_F0
+    return float(out) if out.ndim == 0 else out
 
 
 def channel_max(ops, c):
@@ -132,13 +177,15 @@ def smith_visibility(ops, wi, wo, at, ab):
     return 0.5 / (wo[2] * li + wi[2] * lo)
 
 
-def specular_brdf(ops, wi, wo, h, at, ab):
-    """``Vis D`` (glTF Appendix B ``specular_brdf(alpha)``), zero unless both
+def specular_brdf(ops, wi, wo, h, at, ab, vis_max=math.inf):
+    """``min(Vis, vis_max) D`` (glTF Appendix B ``specular_brdf(alpha)``; ``vis_max``
+    1 for the viewer's anisotropic path, else no cap), zero unless both
     directions are above the horizon; ``h`` their half vector (anisotropy frame)."""
     ok = above(ops, wi, wo)
     wi_s = (wi[0], wi[1], ops.where(ok, wi[2], 1.0))
     wo_s = (wo[0], wo[1], ops.where(ok, wo[2], 1.0))
-    return ops.where(ok, smith_visibility(ops, wi_s, wo_s, at, ab) * warps.ggx_d(ops, h, at, ab), 0.0)
+    vis = ops.minimum(smith_visibility(ops, wi_s, wo_s, at, ab), vis_max)
+    return ops.where(ok, vis * warps.ggx_d(ops, h, at, ab), 0.0)
 
 
 def schlick_f(f0, f90, w):
@@ -159,24 +206,35 @@ def dielectric_f0(ops, specular, specular_color):
     return ops.minimum(DIELECTRIC_F0 * specular_color, 1.0) * specular
 
 
+def _viewer(p) -> bool:
+    return getattr(p, "viewer", "false") == "true"
+
+
 def _frame(ops, wi, wo, p):
-    """Both directions in the anisotropy frame, their half vector, ``V.H`` and the alphas."""
+    """Both directions in the anisotropy frame, their half vector, ``V.H``, the
+    alphas and the cap on ``Vis`` (the viewer's ``alpha_b >= 0.001`` and ``Vis <= 1``
+    where anisotropy is on; none for the specification)."""
     c, s = ops.cos(p.anisotropy_rotation), ops.sin(p.anisotropy_rotation)
     wi_r, wo_r = rotate_to_anisotropy(ops, wi, c, s), rotate_to_anisotropy(ops, wo, c, s)
     h, kh = vec.half_vector_cos(ops, wi_r, wo_r)
     at, ab = gltf_alphas(p.roughness, p.anisotropy_strength)
-    return wi_r, wo_r, h, kh, at, ab
+    cap = math.inf
+    if _viewer(p):
+        aniso = p.anisotropy_strength > 0.0
+        ab = ops.where(aniso, ops.maximum(ab, VIEWER_ALPHA_B_MIN), ab)
+        cap = ops.where(aniso, 1.0, math.inf)
+    return wi_r, wo_r, h, kh, at, ab, cap
 
 
 def gltf_specular(ops, wi, wo, p):
     """``((1 - metallic) F_d + metallic F_metal) Vis D``: the specular parts of
     ``dielectric_brdf`` and ``metal_brdf`` mixed by ``metallic`` (module docstring)."""
-    wi_r, wo_r, h, kh, at, ab = _frame(ops, wi, wo, p)
+    wi_r, wo_r, h, kh, at, ab, cap = _frame(ops, wi, wo, p)
     w = fresnel_weight(ops, kh)
     f_metal = schlick_f(p.base_color, 1.0, w)
     f_diel = schlick_f(dielectric_f0(ops, p.specular, p.specular_color), p.specular, w)
     weight = (1.0 - p.metallic) * f_diel + p.metallic * f_metal
-    return weight * specular_brdf(ops, wi_r, wo_r, h, at, ab)
+    return weight * specular_brdf(ops, wi_r, wo_r, h, at, ab, cap)
 
 
 def _gauss_legendre(n, a, b):
@@ -214,20 +272,27 @@ def _specular_color_max(ops, p):
     return channel_max(ops, p.specular_color) if scm is None else scm
 
 
+def _diffuse_f0(ops, p):
+    """The ``f0`` that weights the diffuse term: ``min(0.04 max(specularColor), 1)
+    specular`` (the specification's ``max_value``), or per channel for the viewer."""
+    return dielectric_f0(ops, p.specular, p.specular_color if _viewer(p) else _specular_color_max(ops, p))
+
+
 def gltf_diffuse_albedo(ops, wi, p):
     """``int gltf_diffuse cos d omega_o = (1 - metallic) baseColor (1 - f0m - (f90 - f0m) I(wi.z))``
-    with ``f0m = min(0.04 max(specularColor), 1) specular``, ``f90 = specular`` and ``I``
-    :func:`fresnel_weight_albedo`."""
-    f0m = dielectric_f0(ops, p.specular, _specular_color_max(ops, p))
+    with ``f0m = min(0.04 max(specularColor), 1) specular`` (per channel for the
+    viewer), ``f90 = specular`` and ``I`` :func:`fresnel_weight_albedo`."""
+    f0m = _diffuse_f0(ops, p)
     avg = f0m + (p.specular - f0m) * fresnel_weight_albedo(ops, wi[2])
     return ops.where(wi[2] > HORIZON, (1.0 - p.metallic) * (1.0 - avg) * p.base_color, 0.0)
 
 
 def gltf_diffuse(ops, wi, wo, p):
     """``(1 - metallic) (1 - max_value(F_d)) baseColor / pi``: the diffuse part of
-    ``dielectric_brdf`` (KHR_materials_specular's ``fresnel_mix``), zero below the horizon."""
+    ``dielectric_brdf`` (KHR_materials_specular's ``fresnel_mix``; ``1 - F_d`` per
+    channel for the viewer), zero below the horizon."""
     kh = vec.half_vector_cos(ops, wi, wo)[1]   # V.H is the same in any frame about n
-    f0m = dielectric_f0(ops, p.specular, _specular_color_max(ops, p))
+    f0m = _diffuse_f0(ops, p)
     f_max = schlick_f(f0m, p.specular, fresnel_weight(ops, kh))
     val = (1.0 - p.metallic) * (1.0 - f_max) * p.base_color * INV_PI
     return ops.where(above(ops, wi, wo), val, 0.0)
@@ -297,6 +362,9 @@ class GltfPBR(BxDF):
         Param("anisotropy_rotation", 0.0, 0.0, math.pi,
               doc="KHR_materials_anisotropy anisotropyRotation (radians, counter-clockwise from the "
                   "tangent; a half turn changes nothing, so other angles are taken mod pi)"),
+        Param("viewer", "false", kind="choice", choices=VIEWER,
+              doc="'true': what Khronos' glTF-Sample-Renderer shows (diffuse weight 1 - F per channel; "
+                  "where anisotropic, Vis clamped to 1 and alpha_b >= 0.001); 'false': the specification"),
     )
 
     def lobes(self):

@@ -248,14 +248,48 @@ def write_merl(path, model_or_values) -> Path:
     return path
 
 
+#: The first line of a Git LFS pointer file (https://github.com/git-lfs/git-lfs/blob/main/docs/spec.md).
+LFS_SPEC = b"version https://git-lfs.github.com/spec/"
+
+
+def not_data(path) -> str | None:
+    """What ``path`` is when it is a stand-in for a data file rather than the
+    data, as a sentence for an error message, else None: a Git LFS pointer (a
+    text file of ~130 bytes whose first line is ``version
+    https://git-lfs.github.com/spec/v1``, then ``oid sha256:...`` and ``size N``)
+    or a git-annex pointer (a path through ``.git/annex/objects``)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1024)
+    except OSError:
+        return None
+    if head.startswith(LFS_SPEC):
+        fields = dict(line.split(" ", 1) for line in head.decode("ascii", "replace").splitlines() if " " in line)
+        size = fields.get("size", "?").strip()
+        return (f"{path}: a Git LFS pointer (the stand-in git keeps for a large file of {size} bytes, "
+                f"{fields.get('oid', 'oid ?').strip()}), not the data: fetch the file with `git lfs pull`")
+    if b"/annex/objects/" in head and len(head) < 512:
+        return f"{path}: a git-annex pointer, not the data: fetch the file with `git annex get`"
+    return None
+
+
+def _header_note(dims) -> str:
+    """How a 12-byte header that is not MERL's reads, for an error message."""
+    return (f"header dimensions {tuple(int(d) for d in dims)}, expected {RES} (theta_h, theta_d, phi_d "
+            f"as little-endian int32)")
+
+
 def read_merl(path) -> MerlBRDF:
-    """Read a MERL binary file into a :class:`MerlBRDF` (ValueError on a bad file)."""
+    """Read a MERL binary file into a :class:`MerlBRDF` (ValueError on a bad
+    file, a Git LFS or git-annex pointer named as such: :func:`not_data`)."""
     path = Path(path)
+    stand_in = not_data(path)
+    if stand_in:
+        raise ValueError(stand_in)
     with open(path, "rb") as fh:
         dims = np.fromfile(fh, dtype="<i4", count=3)
         if dims.size != 3 or tuple(int(d) for d in dims) != RES:
-            raise ValueError(f"{path}: not a MERL BRDF file (header dimensions {tuple(dims)}, "
-                             f"expected {RES})")
+            raise ValueError(f"{path}: not a MERL BRDF file ({_header_note(dims)})")
         data = np.fromfile(fh, dtype="<f8")
     if data.size != 3 * NCELLS:
         raise ValueError(f"{path}: MERL file holds {data.size} values, expected {3 * NCELLS}")

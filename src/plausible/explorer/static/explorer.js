@@ -75,7 +75,8 @@ function buildControls(side) {
     div.className = "param";
     div.dataset.param = p.name;
     const label = document.createElement("label");
-    label.textContent = `${p.name} ${p.range}`;
+    // a choice's options are in its menu: the label names it (a material's 100 names are not a label)
+    label.textContent = p.kind === "choice" ? `${p.name} (${p.choices.length} choices)` : `${p.name} ${p.range}`;
     label.title = p.doc;
     div.appendChild(label);
     const v = s.params[p.name];
@@ -138,7 +139,7 @@ async function selectModel(side, name) {
     document.getElementById(`sphere-${side}`).hidden = true;
     document.getElementById(`slice-${side}`).hidden = true;
     document.getElementById(`verdict-${side}`).innerHTML = "";
-    redrawPlots(); return;
+    redrawPlots(); drawSliceBar(); return;
   }
   const m = state.byName[name];
   const params = {};
@@ -242,7 +243,7 @@ function compile(gl, type, src) {
 function markComputing(side) {
   state.data[side].verdict = null; state.data[side].verdictPending = true;
   document.getElementById(`verdict-${side}`).innerHTML =
-    `<p class="computing"><b style="color:${COLORS[side]}">${side}</b>: computing the verdict…</p>`;
+    `<p class="computing"><b style="color:${COLORS[side]}">${side}</b>: computing the verdict (a few seconds)…</p>`;
 }
 
 // A parameter set the model refuses (422): the controls, the sphere and the plots go back
@@ -344,7 +345,30 @@ async function refreshSlow(side) {
 const refreshFastSoon = { A: debounce(() => refreshFast("A"), 40), B: debounce(() => refreshFast("B"), 40) };
 const refreshSlowSoon = { A: debounce(() => refreshSlow("A"), 700), B: debounce(() => refreshSlow("B"), 700) };
 
-function redrawPlots() { drawPolar(); drawLobe(); drawAlbedo(); }
+function redrawPlots() {
+  document.body.classList.toggle("compare", !!state.sides.B);
+  drawPolar(); drawLobe(); drawAlbedo(); skyNote();
+}
+
+// Half-maximum width (degrees) of a side's lobe in the plane of incidence, from the server's plane data.
+function lobeWidth(side) {
+  const d = state.data[side].plane; if (!d) return null;
+  const top = Math.max(...d.fcos); if (!(top > 0)) return null;
+  const above = d.theta_o.filter((t, i) => d.fcos[i] >= 0.5 * top);
+  return Math.max(...above) - Math.min(...above) + (d.theta_o[1] - d.theta_o[0]);
+}
+
+// The sky is 32 directional lights: a lobe narrower than their spacing mirrors each as a dot. Say so.
+const NARROW_DEG = 20;
+function skyNote() {
+  const narrow = sides().map((k) => [k, lobeWidth(k)]).filter(([, w]) => w !== null && w < NARROW_DEG);
+  state.narrow = Object.fromEntries(narrow);
+  const note = document.getElementById("sky-note");
+  note.textContent = narrow.length && state.env > 0 ?
+    `${narrow.map(([k, w]) => `${k}: a narrow lobe (half-maximum width about ${w.toFixed(0)}°)`).join("; ")}: ` +
+    `the separate bright dots are the sky's 32 directional lights, each mirrored by the lobe, not a defect; ` +
+    `set the environment to 0 to see the point light alone.` : "";
+}
 
 function sides() { return ["A", "B"].filter((k) => state.sides[k]); }
 
@@ -440,7 +464,7 @@ function drawAlbedo() {
   const ticks = niceTicks(top);
   state.albedoAxis = { top, ticks };
   document.getElementById("albedo-note").textContent = colour.length ?
-    `colour models show the channel mean (${colour.join("; ")}); red marks: the largest channel` : "";
+    `; colour models show the channel mean (${colour.join("; ")}); red marks: the largest channel` : "";
   const X = (t) => L + W * t / 90, Y = (v) => B - H * Math.min(v, top) / top;
   g.strokeStyle = "#999"; g.strokeRect(L, 10, W, H);
   g.fillStyle = "#555"; g.font = "11px sans-serif";
@@ -561,7 +585,7 @@ async function start() {
     refreshFastSoon.A(); if (state.sides.B) refreshFastSoon.B(); drawPolar();
   });
   document.getElementById("exposure").addEventListener("input", (e) => { state.exposure = +e.target.value; drawSphere("A"); drawSphere("B"); });
-  document.getElementById("env").addEventListener("input", (e) => { state.env = +e.target.value; drawSphere("A"); drawSphere("B"); });
+  document.getElementById("env").addEventListener("input", (e) => { state.env = +e.target.value; drawSphere("A"); drawSphere("B"); skyNote(); });
   document.getElementById("log-plot").addEventListener("change", (e) => { state.logPlot = e.target.checked; drawPolar(); });
   document.getElementById("per-lobe").addEventListener("change", (e) => { state.perLobe = e.target.checked; drawPolar(); drawLobe(); });
   for (const b of document.querySelectorAll("#exports button")) b.addEventListener("click", () => download(b.dataset.format));
