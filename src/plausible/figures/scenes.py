@@ -59,12 +59,19 @@ def orthographic(mi, width: float, res: int, spp: int, origin=(0, 0, 5), target=
     }
 
 
-def perspective(mi, origin, target, res: int, spp: int, fov: float = 35.0, up=(0, 0, 1), height=None):
+def perspective(mi, origin, target, res: int, spp: int, fov: float = 35.0, up=(0, 0, 1), height=None, crop=None,
+                rfilter: str = "gaussian"):
+    """A perspective camera (``fov`` degrees across the width); ``crop = (y0, x0, h, w)``
+    renders only that window of the film; ``rfilter`` the film's reconstruction filter."""
+    film = {"type": "hdrfilm", "width": res, "height": height or res, "rfilter": {"type": rfilter},
+            "pixel_format": "rgb"}
+    if crop is not None:
+        y0, x0, h, w = crop
+        film.update(crop_offset_x=x0, crop_offset_y=y0, crop_width=w, crop_height=h)
     return {
         "type": "perspective", "fov": fov,
         "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target), up=list(up)),
-        "film": {"type": "hdrfilm", "width": res, "height": height or res, "rfilter": {"type": "gaussian"},
-                 "pixel_format": "rgb"},
+        "film": film,
         "sampler": {"type": "independent", "sample_count": spp},
     }
 
@@ -121,12 +128,20 @@ def lamp(position, intensity, radius: float = LAMP_RADIUS, spectrum: str = "rgb"
             "emitter": {"type": "area", "radiance": {"type": spectrum, "value": value}}}
 
 
-def studio_lights(sky: float = 0.35, sun=((4.0, -3.0, 7.0), 90.0), area=True, sun_distance: float = 3.0):
+#: The studio's sun: the point light it stands for (position, intensity).
+STUDIO_SUN = ((4.0, -3.0, 7.0), 90.0)
+
+
+def studio_lights(sky: float = 0.35, sun=STUDIO_SUN, area=True, sun_distance: float = 3.0,
+                  softbox_distance: float = 1.0):
     """Sky (constant environment) + a spherical lamp "sun" + optionally a rectangular
     area light.  The sun gives the irradiance at the origin of a point light of
     intensity ``sun[1]`` at ``sun[0]``, from ``sun_distance`` times as far in the same
     direction (out of the cameras' view), ``sun_distance`` times as large
-    (:func:`lamp`, angular radius ``LAMP_RADIUS / |sun[0]|``)."""
+    (:func:`lamp`, angular radius ``LAMP_RADIUS / |sun[0]|``).  ``softbox_distance``
+    moves the area light as far again and scales it as much: the same solid angle and
+    irradiance at the origin, out of the view of a distant camera (the sphere grid's
+    saw its unlit back, 92 black pixels in the top-left corner)."""
     import mitsuba as mi
 
     k = float(sun_distance)
@@ -134,32 +149,61 @@ def studio_lights(sky: float = 0.35, sun=((4.0, -3.0, 7.0), 90.0), area=True, su
          "sun": lamp([k * x for x in sun[0]], k * k * sun[1], radius=k * LAMP_RADIUS)}
     if area:
         d["softbox"] = {"type": "rectangle",
-                        "to_world": mi.ScalarTransform4f().look_at(origin=[-6, -2, 9], target=[0, 0, 0], up=[0, 0, 1])
-                        @ mi.ScalarTransform4f().scale(3.0),
+                        "to_world": mi.ScalarTransform4f().look_at(origin=[-6.0 * softbox_distance,
+                                                                           -2.0 * softbox_distance,
+                                                                           9.0 * softbox_distance],
+                                                                   target=[0, 0, 0], up=[0, 0, 1])
+                        @ mi.ScalarTransform4f().scale(3.0 * softbox_distance),
                         "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 1.5}}}
     return d
 
 
+def grid_layout(n: int, cols: int = 4, spacing: float = 2.4, camera_elev: float = 55.0) -> tuple:
+    """The sphere grid's geometry: the centres of ``n`` unit spheres, ``cols`` per row
+    (row-major, the first row at the back), and the camera's origin (looking at the
+    origin, up = z, ``GRID_FOV`` degrees across)."""
+    rows = math.ceil(n / cols)
+    centres = [((c - (cols - 1) / 2) * spacing, ((rows - 1) / 2 - r) * spacing, 0.0)
+               for r, c in (divmod(i, cols) for i in range(n))]
+    el, dist = math.radians(camera_elev), 2.2 * max(cols, rows) * spacing
+    return centres, (0.0, -dist * math.cos(el), dist * math.sin(el))
+
+
+GRID_FOV = 32.0
+
+
 def sphere_grid(mi, bsdfs: list, res: int, spp: int, cols: int = 4, spacing: float = 2.4, plane=True,
-                lights=None, camera_elev: float = 55.0):
+                lights=None, camera_elev: float = 55.0, crop=None):
     """Spheres of radius 1 on a plane, ``cols`` per row (row-major ``bsdfs``),
-    seen from above at ``camera_elev`` degrees."""
-    rows = math.ceil(len(bsdfs) / cols)
+    seen from above at ``camera_elev`` degrees (:func:`grid_layout`); ``crop = (y0, x0,
+    h, w)`` renders only that window of the film."""
+    centres, origin = grid_layout(len(bsdfs), cols, spacing, camera_elev)
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": 6}}
-    for i, b in enumerate(bsdfs):
-        r, c = divmod(i, cols)
-        x = (c - (cols - 1) / 2) * spacing
-        y = ((rows - 1) / 2 - r) * spacing
-        d[f"sphere{i}"] = {"type": "sphere", "center": [x, y, 0.0], "radius": 1.0, "bsdf": b}
+    for i, (b, ctr) in enumerate(zip(bsdfs, centres)):
+        d[f"sphere{i}"] = {"type": "sphere", "center": list(ctr), "radius": 1.0, "bsdf": b}
     if plane:
         d["plane"] = checker_plane()
-    d.update(lights or studio_lights())
-    ext = max(cols, rows) * spacing
-    el = math.radians(camera_elev)
-    dist = 2.2 * ext
-    d["sensor"] = perspective(mi, origin=[0, -dist * math.cos(el), dist * math.sin(el)], target=[0, 0, 0],
-                              res=res, spp=spp, fov=32.0, up=[0, 0, 1])
+    d.update(lights or studio_lights(softbox_distance=3.0))
+    d["sensor"] = perspective(mi, origin=list(origin), target=[0, 0, 0], res=res, spp=spp, fov=GRID_FOV,
+                              up=[0, 0, 1], crop=crop)
     return mi.load_dict(d)
+
+
+def project(points, origin, target, res: int, fov: float, up=(0, 0, 1)) -> np.ndarray:
+    """Pixel coordinates ``(x, y)`` (x to the right, y down, pixel centres at +0.5) of
+    world ``points`` in the square ``res`` image of :func:`perspective`'s camera (``fov``
+    degrees across, looking from ``origin`` at ``target``), and the pixels per scene unit
+    at each point's depth: ``(N, 3)`` columns x, y, scale."""
+    o = np.asarray(origin, dtype=np.float64)
+    fwd = np.asarray(target, dtype=np.float64) - o
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, np.asarray(up, dtype=np.float64))
+    right /= np.linalg.norm(right)
+    cam_up = np.cross(right, fwd)
+    p = np.atleast_2d(np.asarray(points, dtype=np.float64)) - o
+    z = p @ fwd
+    f = res / 2.0 / math.tan(math.radians(fov) / 2.0)
+    return np.stack([res / 2.0 + f * (p @ right) / z, res / 2.0 - f * (p @ cam_up) / z, f / z], axis=-1)
 
 
 def render(mi, scene, seed: int = 0, spp: int | None = None) -> np.ndarray:
