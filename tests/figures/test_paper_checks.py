@@ -469,3 +469,113 @@ def test_a_check_the_quick_mode_cannot_decide_is_not_measured_there(tmp_path):
 
     html = write_index(tmp_path, {"x": dict(title="x", status="ok", items=[], measurements=[q])}).read_text()
     assert "not measured at this quality" in html and "DOES NOT HOLD" not in html
+
+
+def _two_spheres(res, rims):
+    """Two projected discs of as-lambert-vs-as: luminance 0.1 inside, ``rim`` on the
+    ring at 0.88-0.96 of the radius over the upper half."""
+    from plausible.figures import scenes as S
+    from plausible.figures.paper_as import LVA_CAMERA, LVA_CENTRES
+
+    yy, xx = np.mgrid[0:res, 0:res] + 0.5
+    img = np.zeros((res, res))
+    for (x, y, r), rim in zip(S.project(LVA_CENTRES, LVA_CAMERA, (0, 0, 0), res, 32.0), rims):
+        d = np.hypot(xx - x, yy - y) / r
+        img[d <= 1.0] = 0.1
+        img[(d >= 0.88) & (d <= 0.96) & (yy < y)] = rim
+    return np.repeat(img[..., None], 3, axis=-1)
+
+
+def test_rim_highlight_check_sees_a_bright_edge_and_not_two_equal_spheres():
+    """JGT fig. 4's 'highlights near the edge': a rim twice as bright as the centre on the
+    right sphere and none on the left passes (rim / centre 2 vs 1); two equal spheres
+    (ratio 1) and a bright rim on the Lambertian instead fail."""
+    from plausible.figures.paper_as import LVA_CAMERA, LVA_CENTRES, rim_brightness, rim_highlight_check
+
+    lam, model = rim_brightness(_two_spheres(240, (0.1, 0.2)), LVA_CENTRES, LVA_CAMERA, 32.0)
+    assert lam == pytest.approx(1.0, abs=1e-12) and model == pytest.approx(2.0, abs=1e-12)
+    assert _ok(rim_highlight_check(lam, model))
+    assert not _ok(rim_highlight_check(*rim_brightness(_two_spheres(240, (0.2, 0.2)), LVA_CENTRES, LVA_CAMERA, 32.0)))
+    assert not _ok(rim_highlight_check(*rim_brightness(_two_spheres(240, (0.2, 0.1)), LVA_CENTRES, LVA_CAMERA, 32.0)))
+
+
+def test_streak_check_finds_a_streak_along_the_axis_and_rejects_a_smear_or_a_tilt():
+    """JGT fig. 2: a Gaussian streak 8x as long (down the image) as wide on the
+    cylinder's body passes (angle 0, variance ratio 1/64); a round highlight, one
+    stretched across the image, and one tilted 30 deg fail.  (The figure before issue 44,
+    u around the circumference under a 10-degree lamp, read 0.41.)"""
+    from plausible.figures.paper_as import cylinder_body, streak, streak_check
+
+    res = 240
+    body = cylinder_body(res, 34.0)
+    yy, xx = np.mgrid[0:res, 0:res] + 0.5
+    cx, cy = xx[body].mean(), yy[body].mean()
+
+    def blob(sa, sb, tilt=0.0):
+        t = np.radians(tilt)
+        u, v = (xx - cx) * np.cos(t) - (yy - cy) * np.sin(t), (xx - cx) * np.sin(t) + (yy - cy) * np.cos(t)
+        return 0.05 + np.exp(-0.5 * ((u / sa) ** 2 + (v / sb) ** 2))
+
+    angle, ratio = streak(blob(3.0, 24.0), body)
+    assert angle == pytest.approx(0.0, abs=0.5) and ratio < 0.05
+    assert all(_ok(q) for q in streak_check(angle, ratio))
+    for bad in (blob(8.0, 8.0), blob(24.0, 3.0), blob(3.0, 24.0, tilt=30.0)):
+        assert not all(_ok(q) for q in streak_check(*streak(bad, body)))
+
+
+def _mitsuba05_phong(wi, wo, kd, ks, n):
+    """The Modified Phong of the notes (Mitsuba 0.5's ``phong``), written here from the
+    notes' definition: f = kd / pi + ks (n + 2) / (2 pi) cos^n(alpha), alpha the angle
+    between the perfect specular direction of wi and wo (cos clamped at 0), 0 when
+    either direction is below the surface."""
+    wi, wo = np.atleast_2d(wi), np.atleast_2d(wo)
+    refl = np.stack([-wi[:, 0], -wi[:, 1], wi[:, 2]], axis=-1)
+    cos_a = np.clip(np.sum(refl * wo, axis=-1), 0.0, None)
+    f = kd / np.pi + ks * (n + 2) / (2 * np.pi) * cos_a ** n
+    return np.where((wi[:, 2] > 0) & (wo[:, 2] > 0), f, 0.0)
+
+
+@pytest.mark.drjit
+def test_the_mitsuba_phong_plugin_agrees_with_a_mitsuba05_style_modified_phong_from_the_notes():
+    """notes-cornell's 'phong' plugin is plausible's modified-phong under Mitsuba 0.5's
+    name; here it meets an independent implementation (above) at 256 random pairs of
+    directions, to float32 precision, and the same implementation with the exponent off
+    by one is told apart."""
+    pytest.importorskip("mitsuba")
+    from plausible.analysis.mitsuba_bsdf import MitsubaBSDF, load_bsdf_dict
+    from plausible.figures import scenes as S
+
+    S.mitsuba()
+    rng = np.random.default_rng(5)
+    wi, wo = (rng.normal(size=(256, 3)) for _ in range(2))
+    for w in (wi, wo):
+        w /= np.linalg.norm(w, axis=-1, keepdims=True)
+        w[:, 2] = np.abs(w[:, 2])
+    wo[:64] = np.stack([-wi[:64, 0], -wi[:64, 1], wi[:64, 2]], axis=-1) + 0.05 * rng.normal(size=(64, 3))
+    wo /= np.linalg.norm(wo, axis=-1, keepdims=True)
+    for kd, ks, n in ((0.5, 0.2, 30.0), (0.0, 1.0, 10.0), (0.3, 0.6, 2.5)):
+        plugin = MitsubaBSDF(load_bsdf_dict({"type": "phong", "exponent": n, "diffuse_reflectance": kd,
+                                             "specular_reflectance": ks}))
+        got = np.asarray(plugin.eval(wi, wo), dtype=np.float64).reshape(256, -1).mean(axis=-1)
+        want = _mitsuba05_phong(wi, wo, kd, ks, n)
+        assert np.allclose(got, want, rtol=2e-5, atol=1e-6), np.max(np.abs(got - want))
+        assert not np.allclose(got, _mitsuba05_phong(wi, wo, kd, ks, n + 1), rtol=2e-5, atol=1e-6)
+
+
+def test_the_notes_check_of_reciprocity_rejects_a_reciprocal_brdf_and_the_plain_one_does_not():
+    """The notes' checkReciprocity compares F(wo, wi)|cos wo| with F(wi, wo)|cos wi|: on the
+    reciprocal Modified Phong (closed form above, symmetric in wi, wo) it rejects a
+    large share of the pairs on the sphere; the plain test rejects none.  A model that is
+    not reciprocal (Phong's original, the mirror lobe divided by cos wi) fails the plain
+    test."""
+    import plausible
+    from plausible.figures.paper_notes import notes_reciprocity
+
+    notes, plain = notes_reciprocity(plausible.make("modified-phong", ks=0.5, kd=0.5, n=10.0), pairs=2048)
+    assert plain == 0.0 and notes > 0.05
+
+    class NotReciprocal:
+        def eval(self, wi, wo):
+            return _mitsuba05_phong(wi, wo, 0.5, 0.5, 10.0) / np.maximum(np.abs(np.atleast_2d(wi)[:, 2]), 0.05)
+
+    assert notes_reciprocity(NotReciprocal(), pairs=2048)[1] > 0.05

@@ -169,26 +169,32 @@ def sphere_discs(res: int, n: int) -> list:
     return [tuple(float(v) for v in row) for row in S.project(centres, origin, (0, 0, 0), res, S.GRID_FOV)]
 
 
-def highlight_moments(lum, x: float, y: float, radius: float, top: float = 0.03) -> tuple:
-    """The second moments of the highlight of the sphere at pixel ``(x, y)``: over the
-    pixels within 0.95 of its projected ``radius``, the brightest ``top`` fraction
-    weighted by their luminance above that quantile; returns ``(var_x, var_y)``
-    (pixels squared; x across the image, y down it)."""
+def highlight_moments(lum, mask, top: float = 0.03) -> tuple:
+    """The second moments of the highlight among the pixels of ``mask``: the brightest
+    ``top`` fraction, weighted by their luminance above that quantile; returns
+    ``(var_x, var_y, cov_xy)`` (pixels squared; x across the image, y down it)."""
     lum = np.asarray(lum, dtype=np.float64)
     yy, xx = np.mgrid[0:lum.shape[0], 0:lum.shape[1]] + 0.5
-    disc = (xx - x) ** 2 + (yy - y) ** 2 <= (0.95 * radius) ** 2
-    v, px, py = lum[disc], xx[disc], yy[disc]
+    v, px, py = lum[mask], xx[mask], yy[mask]
     w = np.clip(v - np.quantile(v, 1.0 - top), 0.0, None)
     if w.sum() <= 0:
-        return float("nan"), float("nan")
+        return float("nan"), float("nan"), float("nan")
     mx, my = np.average(px, weights=w), np.average(py, weights=w)
-    return float(np.average((px - mx) ** 2, weights=w)), float(np.average((py - my) ** 2, weights=w))
+    return (float(np.average((px - mx) ** 2, weights=w)), float(np.average((py - my) ** 2, weights=w)),
+            float(np.average((px - mx) * (py - my), weights=w)))
+
+
+def disc_mask(shape, x: float, y: float, radius: float) -> np.ndarray:
+    """The pixels of an image of ``shape`` within ``radius`` of ``(x, y)``."""
+    yy, xx = np.mgrid[0:shape[0], 0:shape[1]] + 0.5
+    return (xx - x) ** 2 + (yy - y) ** 2 <= radius ** 2
 
 
 def stretch_check(img, layout, lamp_radius: float) -> dict:
     """JGT fig. 1's point, "from highly anisotropic to the more familiar phong-like
-    behavior", measured where the reader looks: on each sphere the highlight's second
-    moments across (x) and down (y) the image (:func:`highlight_moments`).  On Mitsuba's
+    behavior", measured where the reader looks: on each sphere (within 0.95 of its
+    projected radius) the highlight's second moments across (x) and down (y) the image
+    (:func:`highlight_moments`).  On Mitsuba's
     sphere the tangent u (exponent nu) runs around the vertical axis, across the image
     at the highlight, so a lobe wide in u (small nu) stretches it across: for a pair
     (nu, nv) = (a, b), a < b, and its mirror (b, a), ``var_x / var_y`` of the first over
@@ -200,7 +206,7 @@ def stretch_check(img, layout, lamp_radius: float) -> dict:
     discs = sphere_discs(lum.shape[0], len(layout))
     aspect = {}
     for (nu, nv), (x, y, r) in zip(layout, discs):
-        vx, vy = highlight_moments(lum, x, y, r)
+        vx, vy, _ = highlight_moments(lum, disc_mask(lum.shape, x, y, 0.95 * r))
         aspect[(nu, nv)] = vx / vy
     pairs = sorted((a, b) for a, b in layout if a < b and 2.0 / math.sqrt(a) >= lamp_radius)
     factors = {p: aspect[p] / aspect[p[::-1]] for p in pairs}
@@ -274,27 +280,71 @@ def red_spheres(ctx, exponents, rs, rd):
     ctx.measure(**rim_redness(img, layout))
 
 
+#: as-cylinder: the camera, its target and the cylinder's ends (axis z, radius 1).
+CYL_CAMERA, CYL_TARGET, CYL_ENDS = (0.0, -9.0, 3.0), (0.0, 0.0, 0.4), (-1.0, 2.0)
+
+
+def streak(lum, mask) -> tuple:
+    """The highlight among ``mask``'s pixels as an ellipse (:func:`highlight_moments`,
+    the brightest tenth): the angle of its long axis from the image's vertical
+    (degrees, 0 to 90) and the ratio of its short to its long axis's variance."""
+    vx, vy, cxy = highlight_moments(lum, mask, top=0.1)
+    ev = np.linalg.eigvalsh(np.array([[vx, cxy], [cxy, vy]]))
+    angle = 0.5 * math.degrees(math.atan2(2.0 * cxy, vy - vx))
+    return abs(angle), float(ev[0] / ev[1])
+
+
+def streak_check(angle: float, ratio: float) -> list:
+    """JGT fig. 2's brushed cylinder: a streak along the axis (vertical in the image):
+    its long axis within 10 deg of the vertical and its short-to-long variance ratio
+    at most 0.1 (3.2x as long as wide, in standard deviations)."""
+    return [dict(quantity="the streak runs along the cylinder's axis: its long axis' angle from the image's vertical "
+                 "(deg)", measured=angle, at_most=10.0),
+            dict(quantity="... and is a streak: the highlight's short / long axis variance (<= 0.1)", measured=ratio,
+                 at_most=0.1, note="from the second moments of the brightest tenth of the cylinder's pixels")]
+
+
+def cylinder_body(res: int, fov: float) -> np.ndarray:
+    """The pixels of the as-cylinder image on the cylinder's side, within 0.9 of its
+    projected radius, between the projected ends."""
+    p = S.project([(0, 0, CYL_ENDS[0]), (0, 0, CYL_ENDS[1]), (1, 0, 0.5 * sum(CYL_ENDS))], CYL_CAMERA,
+                  CYL_TARGET, res, fov)
+    yy, xx = np.mgrid[0:res, 0:res] + 0.5
+    return (np.abs(xx - p[0, 0]) <= 0.9 * (p[2, 0] - p[0, 0])) & (yy >= p[1, 1]) & (yy <= p[0, 1])
+
+
 @figure("as-cylinder", "Brushed-metal cylinder", f"{JGT}, fig. 2",
         "A cylinder with the appearance of brushed metal created with the new model with R_d = 0, R_s = 0.9, "
-        "n_u = 10, n_v = 100.", renders=True, nu=10.0, nv=100.0, rs=0.9, rd=0.0)
-def cylinder(ctx, nu, nv, rs, rd):
+        "n_u = 10, n_v = 100. [Text:] \u201cThis appearance is achieved by using the \u201cright\u201d mapping of "
+        "tangent vectors on the surface.\u201d", renders=True, nu=10.0, nv=100.0, rs=0.9, rd=0.0,
+        tangent="u (n_u) along the axis: Mitsuba's dp/du runs around the cylinder, so the plugin gets nu and nv "
+                "swapped")
+def cylinder(ctx, nu, nv, rs, rd, tangent):
     mi = S.mitsuba()
     T = mi.ScalarTransform4f()
-    b = as_bsdf(nu, nv, rs, rd)
-    shapes = {"cyl": {"type": "cylinder", "radius": 1.0, "p0": [0, 0, -1.0], "p1": [0, 0, 2.0], "bsdf": b},
-              "cap": {"type": "disk", "to_world": T.translate([0, 0, 2.0]), "bsdf": b}}
-    lights = S.studio_lights(sky=0.15)
-    lights["key"] = S.lamp([9.0, -15.0, 4.5], 540.0, radius=3.0)   # a point light of 60 at a third the distance
+    b = as_bsdf(nv, nu, rs, rd)     # the paper's u along the axis = Mitsuba's v (sh_frame.t)
+    shapes = {"cyl": {"type": "cylinder", "radius": 1.0, "p0": [0, 0, CYL_ENDS[0]], "p1": [0, 0, CYL_ENDS[1]],
+                      "bsdf": b},
+              "cap": {"type": "disk", "to_world": T.translate([0, 0, CYL_ENDS[1]]), "bsdf": b}}
+    # a dim sky and one key lamp as small as the studio's sun (a point light of 60 at a third the distance): a
+    # 10-degree lamp (radius 3) blurred the streak into a nearly uniform grey
+    lights = {"sky": {"type": "constant", "radiance": S.rgb(0.03)},
+              "key": S.lamp([9.0, -15.0, 4.5], 540.0, radius=S.LAMP_RADIUS)}
     res = ctx.res(1.5)
     ctx.steps(1)
-    sensor = S.perspective(mi, [0, -9, 3.0], [0, 0, 0.4], res, ctx.spp(), fov=34.0, up=[0, 0, 1])
+    sensor = S.perspective(mi, list(CYL_CAMERA), list(CYL_TARGET), res, ctx.spp(), fov=34.0, up=[0, 0, 1])
     img = S.render(mi, S.studio(mi, shapes, sensor, lights=lights), seed=0)
     ctx.tick()
-    ctx.image("cylinder", img, caption="Mitsuba's cylinder: tangent u (nu = 10) runs around the circumference, "
-                                       "v (nv = 100) along the axis, so the highlight spreads around it")
-    ctx.note("Tangent orientation as in docs/mitsuba.md: on Mitsuba's cylinder sh_frame.s = dp/du runs around "
-             "the circumference, so the smaller exponent nu widens the lobe around the cylinder, the look of "
-             "fine grooves along the axis.")
+    img = ctx.image("cylinder", img, caption="tangent u (nu = 10) along the axis, v (nv = 100) around it: fine "
+                                             "grooves around the cylinder, the highlight a streak along it")
+    for q in streak_check(*streak(S.luminance(img), cylinder_body(res, 34.0))):
+        ctx.measure(**q)
+    ctx.note("The paper's image is not in our copy (text only); its 'right' mapping of tangent vectors is read as u "
+             "along the axis, the one of the two that gives the brushed look with n_u = 10 < n_v = 100: the lobe "
+             "is wide along u, so the highlight runs the length of the cylinder. Mitsuba's cylinder has dp/du "
+             "around the circumference (docs/mitsuba.md), so the plugin is given nu = 100, nv = 10. With u around "
+             "the circumference and a 10-degree lamp (the figure before issue 44) the highlight was a wide, short "
+             "smear (short / long axis variance 0.41 against 0.0054 now), the nearly uniform grey the issue saw.")
 
 
 @figure("as-three-views", "Three views of a polished red sphere", f"{TR}, fig. 5; {JGT}, fig. 3",
@@ -329,26 +379,57 @@ def three_views(ctx, nu, nv, rs, rd):
                 da[-1] / da[0], at_most=0.9)
 
 
+#: as-lambert-vs-as: the two spheres' centres and the camera.
+LVA_CENTRES, LVA_CAMERA = ((-1.15, 0.0, 0.0), (1.15, 0.0, 0.0)), (0.0, -8.0, 1.0)
+
+
+def rim_brightness(img, centres, camera, fov: float) -> list:
+    """Per sphere of ``img`` (centres ``centres``, unit radius, seen from ``camera``
+    looking at the origin): the brightest tenth of its rim (pixels at 0.85-0.97 of the
+    projected radius: their 90th percentile of luminance) over the mean of its centre
+    (within 0.4), where JGT fig. 4's reader looks for "highlights near the edge"."""
+    lum = S.luminance(img)
+    yy, xx = np.mgrid[0:lum.shape[0], 0:lum.shape[1]] + 0.5
+    out = []
+    for x, y, r in S.project(centres, camera, (0, 0, 0), lum.shape[0], fov):
+        d = np.hypot(xx - x, yy - y) / r
+        out.append(float(np.quantile(lum[(d >= 0.85) & (d <= 0.97)], 0.9) / lum[d <= 0.4].mean()))
+    return out
+
+
+def rim_highlight_check(lambertian: float, model: float) -> dict:
+    """JGT fig. 4: "the ball on the right has highlights near the edge of the model, and
+    ... the constant-BRDF ball on the left is more flat": the A-S sphere's
+    :func:`rim_brightness` over the Lambertian's, under the same lights (check: >= 1.2,
+    a rim visibly brighter relative to its centre; equal BRDFs give 1)."""
+    return dict(quantity="'highlights near the edge': the brightest tenth of the rim over the centre, A-S sphere / "
+                "Lambertian sphere (>= 1.2)", measured=model / lambertian, at_least=1.2,
+                note=f"rim / centre: Lambertian {lambertian:.3f}, Ashikhmin-Shirley {model:.3f}")
+
+
 @figure("as-lambert-vs-as", "Lambertian sphere next to an Ashikhmin-Shirley sphere (n = 5)", f"{JGT}, fig. 4",
         "An image with a Lambertian sphere (left) and a sphere with n_u = n_v = 5. ... Note how the ball on the "
         "right has highlights near the edge of the model, and how the constant-BRDF ball on the left is more "
         "\u201cflat\u201d.", renders=True, nu=5.0, nv=5.0, rs=0.05, rd=(0.25, 0.4, 0.8))
 def lambert_vs_as(ctx, nu, nv, rs, rd):
     mi = S.mitsuba()
-    shapes = {"lam": {"type": "sphere", "center": [-1.15, 0, 0], "radius": 1.0,
+    shapes = {"lam": {"type": "sphere", "center": list(LVA_CENTRES[0]), "radius": 1.0,
                       "bsdf": {"type": "lambertian", "rd": S.rgb(rd)}},
-              "as": {"type": "sphere", "center": [1.15, 0, 0], "radius": 1.0, "bsdf": as_bsdf(nu, nv, rs, rd)}}
+              "as": {"type": "sphere", "center": list(LVA_CENTRES[1]), "radius": 1.0, "bsdf": as_bsdf(nu, nv, rs, rd)}}
+    # rim lighting: two lamps behind the spheres, left and right, and a front fill (spherical lamps for point
+    # lights of 78, 78 and 20 at a third the distance, scenes.lamp); the paper gives no light setup
     lights = {"sky": {"type": "constant", "radiance": S.rgb(0.05)},
-              # point lights of 55 and 20 at a third the distance, as spherical lamps (scenes.lamp)
-              "back": S.lamp([6.0, 18.0, 9.0], 495.0, radius=3.0),
+              "back-right": S.lamp([12.0, 18.0, 9.0], 700.0, radius=3.0),
+              "back-left": S.lamp([-12.0, 18.0, 9.0], 700.0, radius=3.0),
               "front": S.lamp([-9.0, -18.0, 6.0], 180.0, radius=3.0)}
     res = ctx.res(1.5)
     ctx.steps(1)
-    sensor = S.perspective(mi, [0, -8, 1.0], [0, 0, 0], res, ctx.spp(), fov=32.0, up=[0, 0, 1])
+    sensor = S.perspective(mi, list(LVA_CAMERA), [0, 0, 0], res, ctx.spp(), fov=32.0, up=[0, 0, 1])
     img = S.render(mi, S.studio(mi, shapes, sensor, lights=lights), seed=0)
     ctx.tick()
-    ctx.image("lambert-vs-as", img, caption="left: Lambertian rd; right: Ashikhmin-Shirley nu = nv = 5, same rd, "
-                                            "rs = 0.05; lit from behind-right and front-left")
+    img = ctx.image("lambert-vs-as", img, caption="left: Lambertian rd; right: Ashikhmin-Shirley nu = nv = 5, same "
+                                                  "rd, rs = 0.05; lit from behind, left and right, and a front fill")
+    ctx.measure(**rim_highlight_check(*rim_brightness(img, LVA_CENTRES, LVA_CAMERA, 32.0)))
 
 
 @figure("as-half-sphere", "Half of a diffusely illuminated sphere (rs = 0.05, rd = 1)", f"{TR}, fig. 4",
