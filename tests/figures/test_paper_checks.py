@@ -579,3 +579,22 @@ def test_the_notes_check_of_reciprocity_rejects_a_reciprocal_brdf_and_the_plain_
             return _mitsuba05_phong(wi, wo, 0.5, 0.5, 10.0) / np.maximum(np.abs(np.atleast_2d(wi)[:, 2]), 0.05)
 
     assert notes_reciprocity(NotReciprocal(), pairs=2048)[1] > 0.05
+
+
+def test_fall_angle_and_the_he_torrance_check_of_where_the_fall_begins():
+    """fall_angle: for cos(theta) the albedo is 90 % of its normal value at acos(0.9) =
+    25.84 deg (to the interpolation on a 0.5-degree grid).  He-Torrance (fig. 1): a curve
+    falling like the directional-diffuse part (0.22 at 80 deg) passes; one that holds 1
+    until 83 deg and then drops, as with the delta lobe, fails, though it passes the old
+    check (89.9 deg / 0 deg <= 0.5)."""
+    from plausible.figures.paper_neumann import fall_angle, he_fall_checks, rate_checks
+
+    th = np.arange(0.0, 90.0, 0.5)
+    assert fall_angle(th, np.cos(np.radians(th))) == pytest.approx(np.degrees(np.arccos(0.9)), abs=0.01)
+    assert fall_angle(th, np.ones_like(th)) == 90.0
+    early = np.interp(th, [0, 40, 80, 89.5], [0.995, 0.97, 0.22, 0.015])
+    late = np.interp(th, [0, 80, 83, 86, 89.5], [1.0, 1.04, 0.95, 0.5, 0.015])
+    assert all(_ok(q) for q in he_fall_checks(th, late, early))
+    assert not _ok(he_fall_checks(th, early, late)[0])
+    c = np.array(RATE_COS)
+    assert all(_ok(q) for q in rate_checks("He-Torrance (sigma0 = 0.1, tau = 1.7)", late, th, 0.004 * c ** 0.075))
