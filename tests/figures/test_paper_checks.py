@@ -598,3 +598,16 @@ def test_fall_angle_and_the_he_torrance_check_of_where_the_fall_begins():
     assert not _ok(he_fall_checks(th, early, late)[0])
     c = np.array(RATE_COS)
     assert all(_ok(q) for q in rate_checks("He-Torrance (sigma0 = 0.1, tau = 1.7)", late, th, 0.004 * c ** 0.075))
+
+
+def test_perceptual_checks_at_held_out_incidences_name_them_and_still_compare():
+    """neumann-perceptual at 15, 45, 70 deg, which the fits (0, 30, 60 deg) did not see:
+    measured E_f 3.5534 vs 4.1575 and E_a 0.1114 vs 0.2038 (perceptual vs least
+    squares) hold and say where; the fits the other way round fail."""
+    from plausible.figures.paper_neumann import perceptual_checks
+
+    ls = {"albedo_max": 0.2038, "fcos_max": 4.1575, "perceptual": 4.3613}
+    pc = {"albedo_max": 0.1114, "fcos_max": 3.5534, "perceptual": 3.6648}
+    qs = perceptual_checks(ls, pc, where="at 15, 45, 70 deg (not fitted): ")
+    assert all(_ok(q) for q in qs) and all(q["quantity"].startswith("at 15, 45, 70 deg") for q in qs)
+    assert not any(_ok(q) for q in perceptual_checks(pc, ls, where="x: "))

@@ -910,10 +910,10 @@ def held_out(ctx, ref, fits, thetas_deg):
     at = "at " + ", ".join(f"{t:g}" for t in thetas_deg) + " deg (not fitted): "
     for q in perceptual_checks(errs["l2-cos"], errs["perceptual"], where=at):
         ctx.measure(**q)
+    ratio = errs["perceptual"]["log"] / errs["l2-cos"]["log"]
     ctx.measure(at + "the RMS log error of f cos (minimised by neither fit), perceptual fit / least-squares fit",
-                errs["perceptual"]["log"] / errs["l2-cos"]["log"],
-                note=f"{errs['perceptual']['log']:.4f} vs {errs['l2-cos']['log']:.4f}: above 1, the perceptual fit "
-                     "is not the better on this quantity")
+                ratio, note=f"{errs['perceptual']['log']:.4f} vs {errs['l2-cos']['log']:.4f}"
+                + (": above 1, the perceptual fit is not the better on this quantity" if ratio > 1 else ""))
     for metric, r in fits.items():
         ratios = [peak_radiance(r.model, (t,)) / peak_radiance(ref, (t,)) for t in thetas_deg]
         ctx.measure(f"{metric} fit, {at}peak output radiance / the reference's (1: the highlight as bright)",
