@@ -683,6 +683,14 @@ def fig7(ctx, exponents, radiance_n):
                     note="at normal incidence max(N.L, N.V) = 1 and the integral is 2 pi / (n + 2) exactly")
     radiance_figure(ctx, "radiance", f"Output radiance of the compact metallic model, n = {radiance_n:g}",
                     {f"n={radiance_n:g}": plausible.make("neumann-metal", n=radiance_n)})
+    ctx.note(FIG7_NOTE)
+
+
+FIG7_NOTE = (
+    "The paper's bound c_n <= (n + 2)/2pi is not sufficient for n < 2: at the bound, n = 0 reaches an albedo of "
+    "1.08579 at 45 deg (5/2 - sqrt(2) to 3e-14), n = 1 exceeds 1 by 2.9e-4 near 13 deg, n = 1.5 by about 3e-8 near "
+    "1.5 deg; from n = 2 on no excess was found (docs/models/neumann-metal.md, tests/models/test_neumann.py). The "
+    "paper's fig. 7 shows larger n only; the model (neumann-metal) refuses n < 2, and the smallest n drawn here is 2.")
 
 
 METALS = {"hull": "Au", "turret": "Au", "barrel": "Au", "pyr_al": "Al", "pyr_ag": "Ag", "pyr_cu": "Cu",
