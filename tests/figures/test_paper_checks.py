@@ -611,3 +611,40 @@ def test_perceptual_checks_at_held_out_incidences_name_them_and_still_compare():
     qs = perceptual_checks(ls, pc, where="at 15, 45, 70 deg (not fitted): ")
     assert all(_ok(q) for q in qs) and all(q["quantity"].startswith("at 15, 45, 70 deg") for q in qs)
     assert not any(_ok(q) for q in perceptual_checks(pc, ls, where="x: "))
+
+
+def test_into_gamut_keeps_luminance_and_in_gamut_pixels_and_removes_negative_channels():
+    """Fig. 8's tank: gold seen in gold is outside sRGB (measured pixel (1.3626, 0.5391,
+    -0.0309)); mixed with the grey of its luminance until blue is 0: luminance kept to
+    1e-12, the other pixels untouched, a pixel of negative luminance black."""
+    from plausible.figures.scenes import into_gamut, luminance
+
+    img = np.array([[[1.3626, 0.5391, -0.0309], [0.4, 0.3, 0.2], [-0.1, -0.05, 0.02]]])
+    out, n = into_gamut(img)
+    assert n == 2
+    assert out[0, 0].min() == pytest.approx(0.0, abs=1e-12)
+    assert luminance(out)[0, 0] == pytest.approx(luminance(img)[0, 0], rel=1e-12)
+    assert np.array_equal(out[0, 1], img[0, 1]) and np.array_equal(out[0, 2], [0.0, 0.0, 0.0])
+    # the hue is kept: the result is on the line from the grey of its luminance to the colour
+    y = luminance(img)[0, 0]
+    t = (out[0, 0] - y) / (img[0, 0] - y)
+    assert np.allclose(t, t[0], rtol=1e-12) and 0 < t[0] < 1
+
+
+def test_noise_outliers_count_speckle_in_clusters_and_not_features():
+    """Two independent 'renders' (a smooth image + Gaussian noise of 0.02): a 2 x 2 speckle
+    in one of them is one cluster of 4 pixels, a single hot pixel one isolated outlier;
+    a bright square in both (a feature) and the noise itself count nothing; the
+    isolated-pixel test of the mean image cannot see the cluster."""
+    from plausible.figures.scenes import count_hot_pixels, noise_outliers
+
+    rng = np.random.default_rng(2)
+    y, x = np.mgrid[0:60, 0:60]
+    base = np.repeat((0.3 + 0.002 * x)[..., None], 3, axis=-1)
+    base[40:50, 40:50] = 6.0
+    a, b = (base + 0.02 * rng.standard_normal(base.shape) for _ in range(2))
+    assert noise_outliers(a, b) == (0, 0, 0)
+    a[10:12, 10:12] += 6.0
+    a[30, 5] += 6.0
+    assert noise_outliers(a, b) == (1, 1, 4)
+    assert count_hot_pixels(0.5 * (a + b)) == 1            # the single one only

@@ -199,8 +199,9 @@ def stretch_check(img, layout, lamp_radius: float) -> dict:
     at the highlight, so a lobe wide in u (small nu) stretches it across: for a pair
     (nu, nv) = (a, b), a < b, and its mirror (b, a), ``var_x / var_y`` of the first over
     the second's must exceed 1.  Pairs whose wider lobe (half-width ``2/sqrt(a)`` rad
-    about the mirror direction: ``1/sqrt(a)`` of the half vector, doubled) is narrower than the lamp (angular radius ``lamp_radius``) show the lamp's disc, not
-    the lobe, and are left out.  The measured number is the smallest of these factors
+    about the mirror direction: ``1/sqrt(a)`` of the half vector, doubled) is narrower
+    than the lamp (angular radius ``lamp_radius``) show the lamp's disc, not the lobe,
+    and are left out.  The measured number is the smallest of these factors
     (check: >= 1.5, a stretch the eye sees; a transposed layout gives its inverse)."""
     lum = S.luminance(img)
     discs = sphere_discs(lum.shape[0], len(layout))

@@ -178,7 +178,6 @@ def normal_albedo_radial(model, per_interval: int = 32) -> tuple:
         "incident angles.\u201d", models=FIG1_MODELS)
 def fig1(ctx, models):
     specs = {label: plausible.registry.make_from_spec(s) for label, s in models.items()}
-    plt = _plt()
     th = thetas_with(46 if not ctx.quick else 8, (80.0,))
     # 90 - theta from 10 degrees down to cos(theta) = 1e-9 (5.7e-8 degrees), log-spaced
     near = np.geomspace(10.0, math.degrees(math.asin(1e-9)), 19 if not ctx.quick else 6)
@@ -196,30 +195,7 @@ def fig1(ctx, models):
             curves[HE_DD_LABEL], tails[HE_DD_LABEL], rates[HE_DD_LABEL] = np.split(
                 a - lobes, [len(th), len(th) + len(near)])
         ctx.tick(len(wis))
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10.5, 4.0))
-    # Ward is dashed: up to 80 degrees it lies on Phong (n = 150 and m = 0.1 are the same width)
-    style = {label: dict(ls="--", lw=1.8) if label.startswith("Ward") else {} for label in curves}
-    if HE_DD_LABEL in curves:
-        style[HE_DD_LABEL] = dict(ls=":", lw=1.8)
-    for label, v in curves.items():
-        ax.plot(np.degrees(th), v, label=_greek(label), **style[label])
-    for label, v in tails.items():
-        ax2.plot(near, v, label=_greek(label), **style[label])
-    for a in (ax, ax2):
-        a.set_yscale("log")
-        a.axhline(1.0, color="0.5", lw=0.8, ls="--")
-        a.set_ylabel("directional albedo (log scale)")
-        a.grid(alpha=.3, which="both")
-    ax.set_xlabel("incidence angle (degrees)")
-    ax.set_xlim(0, 90)
-    ax.set_title("albedo against incidence (Fresnel = 1)", fontsize=9)
-    ax.legend(fontsize=7)
-    ax2.set_xscale("log")
-    ax2.invert_xaxis()
-    ax2.set_xlabel("90 - theta (degrees, log scale): the horizon is on the right")
-    ax2.set_title("the last 10 degrees, down to cos(theta) = 1e-9", fontsize=9)
-    fig.tight_layout()
-    ctx.plot("albedo", fig, caption="left: the paper's fig. 1 (log albedo); right: the approach to the horizon")
+    _fig1_plot(ctx, th, near, curves, tails)
     ctx.table("albedo", {"theta_deg": np.degrees(th), **curves})
     ctx.table("albedo-near-horizon", {"90_minus_theta_deg": near, **tails})
     for label in curves:
@@ -265,6 +241,35 @@ def fig1(ctx, models):
     else:
         ctx.note("The He-Torrance curve (sigma0 = 0.1, tau = 1.7) is not shown: the 'he-torrance' model is not in "
                  "this build.")
+
+
+def _fig1_plot(ctx, th, near, curves, tails):
+    """Fig. 1's two panels: the albedo against incidence (log), and the approach to the horizon."""
+    plt = _plt()
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10.5, 4.0))
+    # Ward is dashed: up to 80 degrees it lies on Phong (n = 150 and m = 0.1 are the same width)
+    style = {label: dict(ls="--", lw=1.8) if label.startswith("Ward") else {} for label in curves}
+    if HE_DD_LABEL in curves:
+        style[HE_DD_LABEL] = dict(ls=":", lw=1.8)
+    for label, v in curves.items():
+        ax.plot(np.degrees(th), v, label=_greek(label), **style[label])
+    for label, v in tails.items():
+        ax2.plot(near, v, label=_greek(label), **style[label])
+    for a in (ax, ax2):
+        a.set_yscale("log")
+        a.axhline(1.0, color="0.5", lw=0.8, ls="--")
+        a.set_ylabel("directional albedo (log scale)")
+        a.grid(alpha=.3, which="both")
+    ax.set_xlabel("incidence angle (degrees)")
+    ax.set_xlim(0, 90)
+    ax.set_title("albedo against incidence (Fresnel = 1)", fontsize=9)
+    ax.legend(fontsize=7)
+    ax2.set_xscale("log")
+    ax2.invert_xaxis()
+    ax2.set_xlabel("90 - theta (degrees, log scale): the horizon is on the right")
+    ax2.set_title("the last 10 degrees, down to cos(theta) = 1e-9", fontsize=9)
+    fig.tight_layout()
+    ctx.plot("albedo", fig, caption="left: the paper's fig. 1 (log albedo); right: the approach to the horizon")
 
 
 def fall_angle(thetas_deg, curve, fraction: float = 0.9) -> float:
@@ -737,7 +742,7 @@ def tank_material(metal: str, n: float, pumped: bool) -> dict:
 
 
 def _tank_scene(mi, out, material, res, spp, lights=None, max_depth=6, integrator=None, metal_emission=None,
-                crop=None):
+                crop=None, rfilter="gaussian", sampler="independent"):
     """The fig. 8 scene; ``material(metal)`` gives each metal's BSDF dict.  ``lights``
     replaces the sky and lamps; ``metal_emission`` makes the metals area emitters
     (the mask render); ``integrator`` replaces the path tracer; ``crop = (y0, x0, h,
@@ -769,7 +774,9 @@ def _tank_scene(mi, out, material, res, spp, lights=None, max_depth=6, integrato
         lights = {"sky": {"type": "constant", "radiance": {"type": "spectrum", "value": 0.45}},
                   "sun": S.lamp([9.0, -12.0, 18.0], 810.0, radius=3.0, spectrum="spectrum"),
                   "fill": S.lamp([-15.0, -6.0, 9.0], 270.0, radius=3.0, spectrum="spectrum")}
-    sensor = S.perspective(mi, list(TANK_CAMERA), [0.3, -1.0, 0.6], res, spp, fov=50.0, up=[0, 0, 1], crop=crop)
+    sensor = S.perspective(mi, list(TANK_CAMERA), [0.3, -1.0, 0.6], res, spp, fov=50.0, up=[0, 0, 1], crop=crop,
+                           rfilter=rfilter)
+    sensor["sampler"]["type"] = sampler
     d = {"type": "scene", "integrator": integrator or {"type": "path", "max_depth": max_depth}, "sensor": sensor}
     d.update(shapes)
     d.update(lights)
@@ -777,19 +784,37 @@ def _tank_scene(mi, out, material, res, spp, lights=None, max_depth=6, integrato
 
 
 def _tank_aovs(mi, out, res, camera):
-    """Per pixel of the tank view: the fraction covered by metal (a render in which
-    only the metals emit, radiance 1, nothing reflects) and the cosine of the viewing
-    angle on the surface (the ``aov`` integrator's shading normal and position)."""
+    """Per pixel of the tank view: whether it is entirely on metal, and the cosine of the
+    viewing angle on the surface (the ``aov`` integrator's shading normal and position).
+
+    The mask is a coverage pass in RGB (only the metals emit, radiance 1, nothing
+    reflects; box filter, 16 stratified samples a pixel, so a pixel reads the fraction
+    of its samples on metal, exactly 1 inside), kept where it and its 8 neighbours are
+    1: the renders' gaussian filter reaches a pixel beyond its own.  (The thresholded
+    spectral render at 4 spp it replaces kept 67 % of the hull's front: a uniform
+    spectrum's RGB is noisy with 4 wavelengths a sample.)"""
+    from scipy import ndimage
+
+    from . import scenes as S
+
     def black(metal):
         return {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.0}}
 
-    scene = _tank_scene(mi, out, black, res, 4, lights={}, max_depth=1, metal_emission=1.0)
-    mask = np.asarray(mi.render(scene, seed=1), dtype=np.float64).mean(axis=-1)
-    aov = _tank_scene(mi, out, black, res, 1, lights={}, integrator={"type": "aov", "aovs": "nn:sh_normal,pp:position"})
+    variant = mi.variant()
+    S.mitsuba(S.RGB)
+    try:
+        scene = _tank_scene(mi, out, black, res, 16, lights={}, max_depth=1, metal_emission=1.0, rfilter="box",
+                            sampler="stratified")
+        cover = np.asarray(mi.render(scene, seed=1), dtype=np.float64).mean(axis=-1)
+    finally:
+        S.mitsuba(variant)
+    aov = _tank_scene(mi, out, black, res, 1, lights={}, integrator={"type": "aov", "aovs": "nn:sh_normal,pp:position"},
+                      rfilter="box")
     a = np.asarray(mi.render(aov, seed=1), dtype=np.float64)
     nrm, pos = a[..., -6:-3], a[..., -3:]
     v = np.asarray(camera, dtype=np.float64) - pos
     v /= np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+    mask = ndimage.binary_erosion(cover >= 1.0 - 1e-6, structure=np.ones((3, 3)), border_value=0)
     return mask, np.abs(np.sum(nrm * v, axis=-1))
 
 
@@ -815,9 +840,8 @@ def fig8(ctx, exponents, metals, lights):
     try:
         res, spp = ctx.res(1.0), ctx.spp()
         ctx.steps(2 * len(exponents) + 1)
-        mask, cos_view = _tank_aovs(mi, ctx.out, res, TANK_CAMERA)
+        metal, cos_view = _tank_aovs(mi, ctx.out, res, TANK_CAMERA)
         ctx.tick()
-        metal = mask > 0.999
         grazing, frontal = metal & (cos_view < 0.5), metal & (cos_view > 0.8)
         imgs, labels = [], []
         for pumped in (False, True):
@@ -825,13 +849,24 @@ def fig8(ctx, exponents, metals, lights):
                 def mat(metal, n=n, pumped=pumped):
                     return tank_material(metal, n, pumped)
 
-                img = S.render(mi, _tank_scene(mi, ctx.out, mat, res, spp), seed=0)
+                # two independent renders of half the samples each: their mean is the image, their difference
+                # shows the noise's outliers (scenes.noise_outliers)
+                half = [S.render(mi, _tank_scene(mi, ctx.out, mat, res, max(1, spp // 2)), seed=sd) for sd in (0, 1)]
+                img, negative = S.into_gamut(0.5 * (half[0] + half[1]))
                 label = f"{'pumped once' if pumped else 'reciprocal Phong'}, n = {n:g}"
                 def more(y0, x0, h, w, mat=mat):     # the window with REFINE x the samples, another seed
                     return S.render(mi, _tank_scene(mi, ctx.out, mat, res, spp * REFINE, crop=(y0, x0, h, w)),
                                     seed=7)
 
-                img = ctx.image(f"tank-{'pumped' if pumped else 'phong'}-{n:g}", img, caption=label, refine=more)
+                img = ctx.image(f"tank-{'pumped' if pumped else 'phong'}-{n:g}", img, caption=label,
+                                refine=lambda *w, more=more: S.into_gamut(more(*w))[0])
+                iso, clusters, px = S.noise_outliers(*half)
+                ctx.measure(f"{label}: outliers of the noise, clustered (8-connected groups of 2 or more pixels)",
+                            clusters, note=f"{px} pixels in clusters, {iso} single: pixels whose two half-sample "
+                            "renders differ by more than 5 robust standard deviations of the difference over their "
+                            "15 x 15 neighbourhood (Gaussian noise: none), a caustic's speckle, a sharp lobe's grain")
+                ctx.measure(f"{label}: pixels outside the sRGB gamut (a negative channel), brought to its edge at "
+                            "their own luminance", negative)
                 imgs.append(img)
                 labels.append(label)
                 lum = S.luminance(img)

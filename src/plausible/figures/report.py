@@ -513,8 +513,8 @@ def write_index(out: Path, figs: dict) -> Path:
                     verdict = "not measured at this quality"
                 parts.append(f"<tr><td>{e(x['quantity'])}</td><td>{_cell(x['measured'])}</td>"
                              f"<td>{_expected(x)}</td><td>{_cell(x['tol'])}</td>"
-                             f"<td class='{cls}'>{verdict}</td><td>{e(_joined(x.get('note', ''), x.get('unmeasured', '')))}"
-                             "</td></tr>")
+                             f"<td class='{cls}'>{verdict}</td>"
+                             f"<td>{e(_joined(x.get('note', ''), x.get('unmeasured', '')))}</td></tr>")
             parts.append("</table>")
         for t in m.get("notes", []):
             parts.append(f"<p>{e(t)}</p>")

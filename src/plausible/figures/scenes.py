@@ -349,6 +349,51 @@ def hot_pixels(img: np.ndarray, factor: float = HOT_FACTOR, offset: float = HOT_
     return hot & (above <= 1)
 
 
+#: An outlier of a render's noise: its two half-sample renders differ by more than ``OUTLIER_SIGMAS`` robust
+#: standard deviations of the difference over its ``OUTLIER_WINDOW`` x ``OUTLIER_WINDOW`` neighbourhood.
+OUTLIER_SIGMAS, OUTLIER_WINDOW = 5.0, 15
+
+
+def noise_outliers(a: np.ndarray, b: np.ndarray, sigmas: float = OUTLIER_SIGMAS, window: int = OUTLIER_WINDOW) -> tuple:
+    """Outliers of a render's noise, clustered or not, from two independent renders
+    ``a`` and ``b`` of the same scene (each with half the samples: their mean is the
+    image).  ``d`` = the difference of their luminances; a pixel is an outlier when
+    ``|d - median|`` exceeds ``sigmas`` x the robust standard deviation (1.4826 x the
+    median absolute deviation) of ``d`` over its ``window`` x ``window`` neighbourhood
+    (+ 1e-3).  Gaussian noise has none (5 sigma: 6e-7 a pixel); a feature of the image
+    is in both renders and cancels; a caustic's speckle or a sharp lobe's grain is the
+    heavy tail of the estimator, in one render, and comes in clusters of 2 or more
+    pixels (the renders' gaussian filter spreads a sample over neighbours) that the
+    isolated-pixel test (:func:`hot_pixels`) cannot see.  Returns ``(isolated,
+    clusters, pixels in clusters)``: 8-connected groups of one pixel, groups of two or
+    more, and their pixels."""
+    from scipy import ndimage
+
+    d = luminance(a) - luminance(b)
+    dev = np.abs(d - ndimage.median_filter(d, size=window, mode="nearest"))
+    out = dev > sigmas * 1.4826 * ndimage.median_filter(dev, size=window, mode="nearest") + 1e-3
+    labels, n = ndimage.label(out, structure=np.ones((3, 3)))
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)[1:]
+    return int(np.sum(sizes == 1)), int(np.sum(sizes >= 2)), int(np.sum(sizes[sizes >= 2]))
+
+
+def into_gamut(img: np.ndarray) -> tuple:
+    """Linear sRGB with no negative channel: each pixel with one is mixed with the grey of
+    its own luminance, as little as makes its lowest channel 0 (luminance kept, hue
+    kept, saturation lowered to the gamut's edge); a pixel of luminance <= 0 becomes
+    black.  A spectral render's colour outside the sRGB gamut (gold seen in gold, a
+    product of two saturated reflectances) has a negative channel in linear sRGB; no
+    reconstruction filter makes it (Mitsuba's gaussian is non-negative).  Returns the
+    image and the number of pixels changed."""
+    img = np.array(img, dtype=np.float64)
+    y = luminance(img)[..., None]
+    low = img[..., :3].min(axis=-1, keepdims=True)
+    bad = low < 0.0
+    t = np.where(bad & (y > 0.0), y / np.where(bad, y - low, 1.0), 1.0)
+    img[..., :3] = np.where(bad & (y > 0.0), y + t * (img[..., :3] - y), np.where(bad, 0.0, img[..., :3]))
+    return img, int(np.count_nonzero(bad))
+
+
 def count_hot_pixels(img: np.ndarray, isolated: bool = True) -> int:
     """How many hot pixels :func:`hot_pixels` finds in ``img``."""
     return int(np.count_nonzero(hot_pixels(img, isolated=isolated)))
