@@ -555,9 +555,10 @@ def _pumping(ctx, base, n, correction, times, albedo_tol):
         extra["max (eq. 20) pumped 1x"] = _pumped(base, "max", 1)
         if model_name == "Phong":
             extra["eq. 22 (neumann-metal, c = (n + 2)/2pi)"] = plausible.make("neumann-metal", n=n)
-        for j in times[1:]:
-            extra[f"eq. 21 as a literal recursion (max afresh at every level) pumped {j}x"] = \
-                _pumped(base, "controlled-stepwise", j)
+        if model_name == "Blinn":     # for the unit-albedo Phong it is eq. 20 (a >= cos): the curves drawn above
+            for j in times[1:]:
+                extra[f"eq. 21 as a literal recursion (max afresh at every level) pumped {j}x"] = \
+                    _pumped(base, "controlled-stepwise", j)
         if model_name == "Phong" and not ctx.quick:     # the check of "2 or 3 times" (not a fourth) only
             extra[f"pumped {times[-1] + 1}x"] = _pumped(base, correction, times[-1] + 1)
     th = thetas_with(46 if not ctx.quick else 8, (60.0,))
@@ -568,8 +569,9 @@ def _pumping(ctx, base, n, correction, times, albedo_tol):
         curves[label] = v
     what = {"max": "pumped-up versions (eq. 20)",
             "controlled": "controlled pumped-up versions: the project's reading of eq. 21, max(a(L), a(V), N.L, N.V) "
-                          "capping the total correction (the only reading that reproduces sec. 3.2's text; "
-                          "the literal recursion, dashed, does not)"}[correction]
+                          "capping the total correction (the only reading that reproduces sec. 3.2's text; the "
+                          "literal recursion does not: " + ("dashed" if model_name == "Blinn" else "it is eq. 20 here")
+                          + ")"}[correction]
     albedo_plot(ctx, "albedo", f"Albedo of the reciprocal {model_name} model (n = {n:g}) and its {what}", curves,
                 th, dashed=tuple(extra))
     radiance_figure(ctx, "radiance", f"Output radiance of the reciprocal {model_name} model (n = {n:g}) at 0, 40, "
@@ -604,6 +606,11 @@ def _pumping(ctx, base, n, correction, times, albedo_tol):
     if literal:
         ctx.measure(**literal_recursion_measure(model_name, th, lv[0], literal,
                                                 curves[ex[1]] if len(times) == len(literal) + 1 else None))
+    else:
+        ctx.note("Eq. 21 as a literal recursion, f_k = f_(k-1) / max(a_(k-1)(L), a_(k-1)(V), N.L, N.V), is for this "
+                 "unit-albedo Phong eq. 20 itself (its albedo is at least cos theta at every level, so the control "
+                 "term never acts; tests/models/test_pumped_up.py): the 'max (eq. 20)' curves are its curves, "
+                 "rising toward 1, against the paper's 'converge to an albedo that is below the constant 1'.")
     ctx.note(CONTROLLED_NOTE)
 
 

@@ -166,7 +166,10 @@ class PumpedUp(OfBase):
         for t in range(1, self.params["times"] + 1):
             self.tables.append(albedo_table_of(level, progress=progress))
             if t < self.params["times"]:
-                level = PumpedUp(base=base, correction=self.params["correction"], times=t)
+                # one controlled pumping is the same operator read either way: its table is shared
+                corr = "controlled" if self.params["correction"] == "controlled-stepwise" and t == 1 \
+                    else self.params["correction"]
+                level = PumpedUp(base=base, correction=corr, times=t)
         # colours of the base and of the Fresnel factor share the channel axis
         chans = {c for c in (base.channels, self.channels) if c}
         if len(chans) > 1:
