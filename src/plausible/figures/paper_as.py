@@ -134,7 +134,7 @@ def about_68(centre: float, se: float, albedo0: float) -> dict:
     (centre +- 2 s.e.) from 68 %: it holds when that is at most 2 points.  The model's
     exact value (``albedo0``, 0.696 for nu = nv = 10) rounds to 70 %, not 68 %."""
     gap = max(0.0, abs(float(centre) - ABOUT_68) - 2.0 * float(se))
-    return dict(quantity="nu = nv = 10: the rendered centre luminance vs the paper's 'about 68%' (distance of the "
+    return dict(quantity="nu = nv = 10: the render's centre vs the paper's 'about 68%' luminance (distance of the "
                 "render's centre +- 2 s.e. from 0.68; 'about' = 2 points)", measured=gap, at_most=ABOUT,
                 note=f"render {centre:.4f} +- {se:.4f} (1 s.e.); plausible.albedo {albedo0:.4f}, which rounds to "
                      f"{round(100 * albedo0):d} %: the paper's 68 is {100 * (albedo0 - ABOUT_68):.1f} points below "
