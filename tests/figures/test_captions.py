@@ -25,7 +25,7 @@ def _squash(text: str) -> str:
     text = re.sub(r"<\|[^|]*\|>", " ", text)
     for a, b in (("\u2019", "'"), ("\u2018", "'"), ("\u201c", ""), ("\u201d", ""), ('"', "")):
         text = text.replace(a, b)
-    return re.sub(r"[\s$_\\{}]", "", text).lower()
+    return re.sub(r"[\s$_\\{}*]", "", text).lower()     # * : the italics of the text files
 
 
 def _paper_texts():

@@ -229,9 +229,11 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     failed = [n for n, m in results.items() if m["status"] != "ok"]
     checks = [x for m in results.values() for x in m.get("measurements", []) if "ok" in x]
     bad = [x for x in checks if not x["ok"]]
+    unmeasured = sum(1 for m in results.values() for x in m.get("measurements", []) if x.get("unmeasured"))
     console.print(f"{len(results)} figures ({sum(m.get('cached', False) for m in results.values())} cached, "
                   f"{len(failed)} failed) in {total} s; {len(checks) - len(bad)}/{len(checks)} measured "
-                  f"checks hold -> {escape(str(out / 'index.html'))}")
+                  f"checks hold" + (f", {unmeasured} not measured at this quality" if unmeasured else "")
+                  + f" -> {escape(str(out / 'index.html'))}")
     return results
 
 
@@ -460,6 +462,10 @@ _JS = """<script>
 </script>"""
 
 
+def _joined(*parts) -> str:
+    return "; ".join(p for p in parts if p)
+
+
 def _cell(x):
     """A measurement's number (a boolean as yes / no) in a table cell."""
     if isinstance(x, bool):
@@ -521,9 +527,12 @@ def write_index(out: Path, figs: dict) -> Path:
                 ok = x.get("ok")
                 cls = "" if ok is None else ("ok" if ok else "bad")
                 verdict = "" if ok is None else ("holds" if ok else "DOES NOT HOLD")
+                if x.get("unmeasured"):
+                    verdict = "not measured at this quality"
                 parts.append(f"<tr><td>{e(x['quantity'])}</td><td>{_cell(x['measured'])}</td>"
                              f"<td>{_expected(x)}</td><td>{_cell(x['tol'])}</td>"
-                             f"<td class='{cls}'>{verdict}</td><td>{e(x.get('note', ''))}</td></tr>")
+                             f"<td class='{cls}'>{verdict}</td>"
+                             f"<td>{e(_joined(x.get('note', ''), x.get('unmeasured', '')))}</td></tr>")
             parts.append("</table>")
         for t in m.get("notes", []):
             parts.append(f"<p>{e(t)}</p>")

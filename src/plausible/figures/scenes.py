@@ -64,12 +64,19 @@ def orthographic(mi, width: float, res: int, spp: int, origin=(0, 0, 5), target=
     }
 
 
-def perspective(mi, origin, target, res: int, spp: int, fov: float = 35.0, up=(0, 0, 1), height=None):
+def perspective(mi, origin, target, res: int, spp: int, fov: float = 35.0, up=(0, 0, 1), height=None, crop=None,
+                rfilter: str = "gaussian"):
+    """A perspective camera (``fov`` degrees across the width); ``crop = (y0, x0, h, w)``
+    renders only that window of the film; ``rfilter`` the film's reconstruction filter."""
+    film = {"type": "hdrfilm", "width": res, "height": height or res, "rfilter": {"type": rfilter},
+            "pixel_format": "rgb"}
+    if crop is not None:
+        y0, x0, h, w = crop
+        film.update(crop_offset_x=x0, crop_offset_y=y0, crop_width=w, crop_height=h)
     return {
         "type": "perspective", "fov": fov,
         "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target), up=list(up)),
-        "film": {"type": "hdrfilm", "width": res, "height": height or res, "rfilter": {"type": "gaussian"},
-                 "pixel_format": "rgb"},
+        "film": film,
         "sampler": {"type": "independent", "sample_count": spp},
     }
 
@@ -126,12 +133,20 @@ def lamp(position, intensity, radius: float = LAMP_RADIUS, spectrum: str = "rgb"
             "emitter": {"type": "area", "radiance": {"type": spectrum, "value": value}}}
 
 
-def studio_lights(sky: float = 0.35, sun=((4.0, -3.0, 7.0), 90.0), area=True, sun_distance: float = 3.0):
+#: The studio's sun: the point light it stands for (position, intensity).
+STUDIO_SUN = ((4.0, -3.0, 7.0), 90.0)
+
+
+def studio_lights(sky: float = 0.35, sun=STUDIO_SUN, area=True, sun_distance: float = 3.0,
+                  softbox_distance: float = 1.0):
     """Sky (constant environment) + a spherical lamp "sun" + optionally a rectangular
     area light.  The sun gives the irradiance at the origin of a point light of
     intensity ``sun[1]`` at ``sun[0]``, from ``sun_distance`` times as far in the same
     direction (out of the cameras' view), ``sun_distance`` times as large
-    (:func:`lamp`, angular radius ``LAMP_RADIUS / |sun[0]|``)."""
+    (:func:`lamp`, angular radius ``LAMP_RADIUS / |sun[0]|``).  ``softbox_distance``
+    moves the area light as far again and scales it as much: the same solid angle and
+    irradiance at the origin, out of the view of a distant camera (the sphere grid's
+    saw its unlit back, 92 black pixels in the top-left corner)."""
     import mitsuba as mi
 
     k = float(sun_distance)
@@ -139,32 +154,61 @@ def studio_lights(sky: float = 0.35, sun=((4.0, -3.0, 7.0), 90.0), area=True, su
          "sun": lamp([k * x for x in sun[0]], k * k * sun[1], radius=k * LAMP_RADIUS)}
     if area:
         d["softbox"] = {"type": "rectangle",
-                        "to_world": mi.ScalarTransform4f().look_at(origin=[-6, -2, 9], target=[0, 0, 0], up=[0, 0, 1])
-                        @ mi.ScalarTransform4f().scale(3.0),
+                        "to_world": mi.ScalarTransform4f().look_at(origin=[-6.0 * softbox_distance,
+                                                                           -2.0 * softbox_distance,
+                                                                           9.0 * softbox_distance],
+                                                                   target=[0, 0, 0], up=[0, 0, 1])
+                        @ mi.ScalarTransform4f().scale(3.0 * softbox_distance),
                         "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 1.5}}}
     return d
 
 
+def grid_layout(n: int, cols: int = 4, spacing: float = 2.4, camera_elev: float = 55.0) -> tuple:
+    """The sphere grid's geometry: the centres of ``n`` unit spheres, ``cols`` per row
+    (row-major, the first row at the back), and the camera's origin (looking at the
+    origin, up = z, ``GRID_FOV`` degrees across)."""
+    rows = math.ceil(n / cols)
+    centres = [((c - (cols - 1) / 2) * spacing, ((rows - 1) / 2 - r) * spacing, 0.0)
+               for r, c in (divmod(i, cols) for i in range(n))]
+    el, dist = math.radians(camera_elev), 2.2 * max(cols, rows) * spacing
+    return centres, (0.0, -dist * math.cos(el), dist * math.sin(el))
+
+
+GRID_FOV = 32.0
+
+
 def sphere_grid(mi, bsdfs: list, res: int, spp: int, cols: int = 4, spacing: float = 2.4, plane=True,
-                lights=None, camera_elev: float = 55.0):
+                lights=None, camera_elev: float = 55.0, crop=None):
     """Spheres of radius 1 on a plane, ``cols`` per row (row-major ``bsdfs``),
-    seen from above at ``camera_elev`` degrees."""
-    rows = math.ceil(len(bsdfs) / cols)
+    seen from above at ``camera_elev`` degrees (:func:`grid_layout`); ``crop = (y0, x0,
+    h, w)`` renders only that window of the film."""
+    centres, origin = grid_layout(len(bsdfs), cols, spacing, camera_elev)
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": 6}}
-    for i, b in enumerate(bsdfs):
-        r, c = divmod(i, cols)
-        x = (c - (cols - 1) / 2) * spacing
-        y = ((rows - 1) / 2 - r) * spacing
-        d[f"sphere{i}"] = {"type": "sphere", "center": [x, y, 0.0], "radius": 1.0, "bsdf": b}
+    for i, (b, ctr) in enumerate(zip(bsdfs, centres)):
+        d[f"sphere{i}"] = {"type": "sphere", "center": list(ctr), "radius": 1.0, "bsdf": b}
     if plane:
         d["plane"] = checker_plane()
-    d.update(lights or studio_lights())
-    ext = max(cols, rows) * spacing
-    el = math.radians(camera_elev)
-    dist = 2.2 * ext
-    d["sensor"] = perspective(mi, origin=[0, -dist * math.cos(el), dist * math.sin(el)], target=[0, 0, 0],
-                              res=res, spp=spp, fov=32.0, up=[0, 0, 1])
+    d.update(lights or studio_lights(softbox_distance=3.0))
+    d["sensor"] = perspective(mi, origin=list(origin), target=[0, 0, 0], res=res, spp=spp, fov=GRID_FOV,
+                              up=[0, 0, 1], crop=crop)
     return mi.load_dict(d)
+
+
+def project(points, origin, target, res: int, fov: float, up=(0, 0, 1)) -> np.ndarray:
+    """Pixel coordinates ``(x, y)`` (x to the right, y down, pixel centres at +0.5) of
+    world ``points`` in the square ``res`` image of :func:`perspective`'s camera (``fov``
+    degrees across, looking from ``origin`` at ``target``), and the pixels per scene unit
+    at each point's depth: ``(N, 3)`` columns x, y, scale."""
+    o = np.asarray(origin, dtype=np.float64)
+    fwd = np.asarray(target, dtype=np.float64) - o
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, np.asarray(up, dtype=np.float64))
+    right /= np.linalg.norm(right)
+    cam_up = np.cross(right, fwd)
+    p = np.atleast_2d(np.asarray(points, dtype=np.float64)) - o
+    z = p @ fwd
+    f = res / 2.0 / math.tan(math.radians(fov) / 2.0)
+    return np.stack([res / 2.0 + f * (p @ right) / z, res / 2.0 - f * (p @ cam_up) / z, f / z], axis=-1)
 
 
 def render(mi, scene, seed: int = 0, spp: int | None = None) -> np.ndarray:
@@ -308,6 +352,51 @@ def hot_pixels(img: np.ndarray, factor: float = HOT_FACTOR, offset: float = HOT_
         return hot
     above = (stack > thresh[None]).sum(axis=0) - hot   # neighbours above this pixel's threshold
     return hot & (above <= 1)
+
+
+#: An outlier of a render's noise: its two half-sample renders differ by more than ``OUTLIER_SIGMAS`` robust
+#: standard deviations of the difference over its ``OUTLIER_WINDOW`` x ``OUTLIER_WINDOW`` neighbourhood.
+OUTLIER_SIGMAS, OUTLIER_WINDOW = 5.0, 15
+
+
+def noise_outliers(a: np.ndarray, b: np.ndarray, sigmas: float = OUTLIER_SIGMAS, window: int = OUTLIER_WINDOW) -> tuple:
+    """Outliers of a render's noise, clustered or not, from two independent renders
+    ``a`` and ``b`` of the same scene (each with half the samples: their mean is the
+    image).  ``d`` = the difference of their luminances; a pixel is an outlier when
+    ``|d - median|`` exceeds ``sigmas`` x the robust standard deviation (1.4826 x the
+    median absolute deviation) of ``d`` over its ``window`` x ``window`` neighbourhood
+    (+ 1e-3).  Gaussian noise has none (5 sigma: 6e-7 a pixel); a feature of the image
+    is in both renders and cancels; a caustic's speckle or a sharp lobe's grain is the
+    heavy tail of the estimator, in one render, and comes in clusters of 2 or more
+    pixels (the renders' gaussian filter spreads a sample over neighbours) that the
+    isolated-pixel test (:func:`hot_pixels`) cannot see.  Returns ``(isolated,
+    clusters, pixels in clusters)``: 8-connected groups of one pixel, groups of two or
+    more, and their pixels."""
+    from scipy import ndimage
+
+    d = luminance(a) - luminance(b)
+    dev = np.abs(d - ndimage.median_filter(d, size=window, mode="nearest"))
+    out = dev > sigmas * 1.4826 * ndimage.median_filter(dev, size=window, mode="nearest") + 1e-3
+    labels, n = ndimage.label(out, structure=np.ones((3, 3)))
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)[1:]
+    return int(np.sum(sizes == 1)), int(np.sum(sizes >= 2)), int(np.sum(sizes[sizes >= 2]))
+
+
+def into_gamut(img: np.ndarray) -> tuple:
+    """Linear sRGB with no negative channel: each pixel with one is mixed with the grey of
+    its own luminance, as little as makes its lowest channel 0 (luminance kept, hue
+    kept, saturation lowered to the gamut's edge); a pixel of luminance <= 0 becomes
+    black.  A spectral render's colour outside the sRGB gamut (gold seen in gold, a
+    product of two saturated reflectances) has a negative channel in linear sRGB; no
+    reconstruction filter makes it (Mitsuba's gaussian is non-negative).  Returns the
+    image and the number of pixels changed."""
+    img = np.array(img, dtype=np.float64)
+    y = luminance(img)[..., None]
+    low = img[..., :3].min(axis=-1, keepdims=True)
+    bad = low < 0.0
+    t = np.where(bad & (y > 0.0), y / np.where(bad, y - low, 1.0), 1.0)
+    img[..., :3] = np.where(bad & (y > 0.0), y + t * (img[..., :3] - y), np.where(bad, 0.0, img[..., :3]))
+    return img, int(np.count_nonzero(bad))
 
 
 def count_hot_pixels(img: np.ndarray, isolated: bool = True) -> int:

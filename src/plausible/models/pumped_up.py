@@ -83,8 +83,9 @@ def check_bounded_albedo(model, owner: str = "PumpedUp", progress=None) -> None:
 
 
 #: The corrections: eq. 20; eq. 21 read as a four-way maximum that caps the total
-#: correction; eq. 21 read as the OCR prints it, a product, at every level.
-CORRECTIONS = ("max", "controlled", "controlled-product")
+#: correction; eq. 21 read as the OCR prints it, a product, at every level; eq. 21's
+#: four-way maximum taken literally as a recursion, afresh at every level.
+CORRECTIONS = ("max", "controlled", "controlled-product", "controlled-stepwise")
 
 
 def correction(ops, kind, albedos, wi, wo):
@@ -103,12 +104,19 @@ def correction(ops, kind, albedos, wi, wo):
       and 1, so every level satisfies eq. 17.
     * ``"controlled-product"``: eq. 21 read as printed, ``max(a(L), a(V), (N.V)(N.L))``,
       applied at every level: ``G_k = prod_j max(g1_j, (N.V)(N.L))``.
+    * ``"controlled-stepwise"``: eq. 21's four-way maximum as a literal recursion,
+      ``f_k = f_(k-1) / max(a_(k-1)(L), a_(k-1)(V), N.L, N.V)``, so
+      ``G_k = prod_j max(g1_j, N.L, N.V)``; one pumping is ``"controlled"``.  Not the
+      reading followed (docs/models/pumped-up.md): for the unit-albedo Phong it is eq. 20
+      (``a >= cos``), and it lifts Blinn's albedo at 80 deg 0.2202 -> 0.5138 -> 0.7652.
     """
     total = 1.0
     for a_l, a_v in albedos:
         g = ops.maximum(a_l, a_v)
         if kind == "controlled-product":
             g = ops.maximum(g, wi[2] * wo[2])
+        elif kind == "controlled-stepwise":
+            g = ops.maximum(g, ops.maximum(wi[2], wo[2]))
         total = total * g
     if kind == "controlled":
         total = ops.maximum(total, ops.maximum(wi[2], wo[2]))
@@ -131,7 +139,8 @@ class PumpedUp(OfBase):
                    extremes=("reciprocal-blinn:ks=1:n=20",)),
         Param("correction", "max", kind="choice", choices=CORRECTIONS,
               doc="g1 = max(a(L), a(V)) (eq. 20), controlled g2 = max(a(L), a(V), N.V, N.L) capping the "
-                  "total (eq. 21), or eq. 21 as printed, max(a(L), a(V), (N.V)(N.L)) at every level",
+                  "total (eq. 21), eq. 21 as printed, max(a(L), a(V), (N.V)(N.L)) at every level, or g2 "
+                  "afresh at every level (controlled-stepwise, the literal recursion)",
               extremes=("controlled",)),
         Param("times", 1, 0, 8, integer=True, doc="how many times the operator is applied (0: the base, "
               "times the Fresnel factor)",
@@ -157,7 +166,10 @@ class PumpedUp(OfBase):
         for t in range(1, self.params["times"] + 1):
             self.tables.append(albedo_table_of(level, progress=progress))
             if t < self.params["times"]:
-                level = PumpedUp(base=base, correction=self.params["correction"], times=t)
+                # one controlled pumping is the same operator read either way: its table is shared
+                corr = "controlled" if self.params["correction"] == "controlled-stepwise" and t == 1 \
+                    else self.params["correction"]
+                level = PumpedUp(base=base, correction=corr, times=t)
         # colours of the base and of the Fresnel factor share the channel axis
         chans = {c for c in (base.channels, self.channels) if c}
         if len(chans) > 1:
