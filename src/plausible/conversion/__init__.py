@@ -253,12 +253,9 @@ def read_sources(source) -> list[Source]:
         if suffix == ".xml":
             return _xml_sources(text)
         return _json_sources(text)
-    if " + " in text:
-        from ..models.sum import Sum
-
-        parts = [registry.make_from_spec(s.strip()) for s in text.split(" + ")]
-        return [Source("sum", Sum(parts, name="sum"), " + ".join(s.strip() for s in text.split(" + ")))]
-    m = registry.make_from_spec(text)
+    m = registry.make_from_spec(text)         # a sum "a + b" too (registry.split_sum)
+    if len(registry.split_sum(text)) > 1:
+        return [Source("sum", m, m.spec())]
     spec = registry.spec_of(m)
     return [Source(getattr(m, "label", None) or m.name, m, text if spec == repr(m) else spec)]
 

@@ -56,7 +56,7 @@ def register(variant: str | None = None) -> list:
     Plugins are registered for the current Mitsuba variant (``variant`` sets it
     first; with none set, ``llvm_ad_rgb`` is tried, then ``scalar_rgb``).  Call
     again after switching variants.  Returns the plugin names (those of
-    :func:`plugin_names`, then ``merl``, ``plausible_material`` and ``plausible_compensated``).
+    :func:`plugin_names`, then ``merl``, ``plausible_material``, ``plausible_sum`` and ``plausible_compensated``).
     """
     import mitsuba as mi
 
@@ -69,6 +69,7 @@ def register(variant: str | None = None) -> list:
     from . import compensated, material
 
     made[material.PLUGIN] = material.make_material_plugin_class        # plausible_material
+    made[material.SUM_PLUGIN] = material.make_sum_plugin_class         # plausible_sum
     made[compensated.PLUGIN] = compensated.make_compensated_class      # plausible_compensated
     for plugin, make in made.items():
         if plugin not in classes:
