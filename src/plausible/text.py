@@ -86,8 +86,8 @@ def html_table(caption: str, header, rows) -> str:
     return f"<table><caption>{escape(str(caption))}</caption><tr>{head}</tr>{body}</table>"
 
 
-def write_atomic(path, text: str) -> None:
-    """Write ``text`` to ``path`` whole or not at all: into a temporary file beside it,
+def write_atomic(path, text: str | bytes) -> None:
+    """Write ``text`` (or ``bytes``) to ``path`` whole or not at all: into a temporary file beside it,
     then renamed over it (``os.replace``, atomic on POSIX and Windows).  An error or an
     interrupt (Ctrl-C) while writing removes the temporary file and leaves ``path`` as it
     was (absent, or its old content): never a half-written file."""
@@ -95,7 +95,7 @@ def write_atomic(path, text: str) -> None:
     head, name = os.path.split(path)
     tmp = os.path.join(head, f".{name}.{os.getpid()}.tmp")
     try:
-        with open(tmp, "w", encoding="utf-8") as f:
+        with (open(tmp, "wb") if isinstance(text, bytes) else open(tmp, "w", encoding="utf-8")) as f:
             f.write(text)
         os.replace(tmp, path)
     except BaseException:
