@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
+from .textures import GLTF_TEXTURE_SLOTS, prepare
 
 __all__ = ["Conversion", "Converted", "OUTPUTS", "Source", "TOLERANCE", "albedo_check", "check_output", "convert",
            "mitsuba_xml", "read_sources"]
@@ -149,8 +150,6 @@ class Conversion:
         if not self.items:
             raise ValueError(f"out: no material of the source was converted ({len(self.skipped)} skipped): "
                              f"{str(path)!r} not written")
-        from .textures import prepare
-
         prepare(self, p, suffix)        # textures glTF cannot hold as PNG, Kd x map_Kd baked for Mitsuba
         text = self.text(suffix, p.resolve().parent)
         try:
@@ -641,12 +640,6 @@ TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_r
                             "blendbsdf-tir": "bsdf_0.diffuse_reflectance"},
                  "map_Ks": {"roughconductor": "specular_reflectance", "blendbsdf": "bsdf_1.specular_reflectance",
                             "blendbsdf-tir": "bsdf_1.specular_reflectance"}}
-
-
-#: The glTF material's texture that an MTL texture becomes in a ``.gltf`` output (a reference to
-#: the file as the MTL names it; glTF multiplies ``baseColorTexture`` by ``baseColorFactor``, the
-#: fitted colour, as MTL multiplies ``map_Kd`` by ``Kd``).
-GLTF_TEXTURE_SLOTS = {"map_Kd": "baseColorTexture"}
 
 
 def _with_textures(d, family, textures, notes, warn):

@@ -24,11 +24,17 @@ from pathlib import Path
 import numpy as np
 
 from ..spectra import linear_to_srgb, srgb_to_linear
+from .mitsuba import set_entry
 
-__all__ = ["GLTF_FORMATS", "bake", "prepare", "to_png"]
+__all__ = ["GLTF_FORMATS", "GLTF_TEXTURE_SLOTS", "bake", "prepare", "to_png"]
 
 #: The image suffixes a glTF file may reference (PNG and JPEG).
 GLTF_FORMATS = (".png", ".jpg", ".jpeg")
+#: The glTF material's texture that an MTL texture becomes in a ``.gltf`` output (a reference to
+#: the file as the MTL names it; glTF multiplies ``baseColorTexture`` by ``baseColorFactor``, the
+#: fitted colour, as MTL multiplies ``map_Kd`` by ``Kd``).
+GLTF_TEXTURE_SLOTS = {"map_Kd": "baseColorTexture"}
+
 
 
 def _file(c, name) -> Path:
@@ -98,8 +104,6 @@ def prepare(conversion, out: Path, suffix: str) -> None:
 
 
 def _gltf_images(c, out: Path) -> None:
-    from . import GLTF_TEXTURE_SLOTS
-
     for stmt in [s for s in GLTF_TEXTURE_SLOTS if s in c.textures]:
         name = c.textures[stmt]
         if Path(str(name)).suffix.lower() in GLTF_FORMATS:
@@ -116,8 +120,6 @@ def _gltf_images(c, out: Path) -> None:
 
 
 def _bakes(c, out: Path) -> None:
-    from . import mitsuba as CM
-
     root = c.result["bsdf"] if c.result.get("type") == "mask" else c.result
     for slot, (stmt, colour) in c.bakes.items():
         dst = out.parent / f"{out.stem}.{_safe(c.name)}.{stmt}.png"
@@ -127,4 +129,4 @@ def _bakes(c, out: Path) -> None:
             c.warnings.append(f"{stmt} x Kd not baked ({e}): the texture replaces the fitted colour "
                               f"{' '.join(f'{x:.4g}' for x in colour)} of {slot}")
             continue
-        CM.set_entry(root, slot, {"type": "bitmap", "filename": _name_for(c, dst)})
+        set_entry(root, slot, {"type": "bitmap", "filename": _name_for(c, dst)})
