@@ -188,6 +188,22 @@ def test_a_tga_map_is_written_as_png_for_gltf_and_validates(tmp_path):
     assert issues["numErrors"] == 0, issues["messages"]
 
 
+def test_tga_maps_of_one_name_in_two_folders_become_two_pngs_and_a_shared_one_one(tmp_path):
+    from PIL import Image
+
+    image(tmp_path / "a" / "wood.tga", (10, 20, 30))
+    image(tmp_path / "b" / "wood.tga", (200, 100, 50))
+    text = "".join(f"newmtl {n}\nKd 1 1 1\nillum 1\nmap_Kd {f}\n" for n, f in
+                   (("one", "a/wood.tga"), ("two", "b/wood.tga"), ("three", "a/wood.tga")))
+    c = convert(str(write(tmp_path, text, "t.mtl")), to="gltf")
+    doc = json.loads(c.write(tmp_path / "t.gltf").read_text())
+    uri = {m["name"]: doc["images"][doc["textures"][m["pbrMetallicRoughness"]["baseColorTexture"]["index"]]["source"]]["uri"]
+           for m in doc["materials"]}
+    assert uri["one"] == uri["three"] != uri["two"]
+    for name, rgb in (("one", (10, 20, 30)), ("two", (200, 100, 50))):
+        assert np.all(np.asarray(Image.open(tmp_path / uri[name])) == rgb)
+
+
 def test_an_unreadable_map_is_dropped_from_the_gltf_with_a_warning(tmp_path):
     (tmp_path / "broken.bmp").write_bytes(b"not an image")
     c = convert(str(write(tmp_path, "newmtl m\nKd 0.5 0.5 0.5\nillum 1\nmap_Kd broken.bmp\n", "t.mtl")), to="gltf")

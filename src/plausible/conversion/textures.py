@@ -95,22 +95,31 @@ def prepare(conversion, out: Path, suffix: str) -> None:
     """Make the texture files the output ``out`` (of ``suffix``) of ``conversion`` needs, beside it,
     and point the materials at them (module docstring); a texture that cannot be made is a warning of
     its material."""
-    out = Path(out)
+    out, made = Path(out), {}
     for c in conversion.items:
         if suffix == ".gltf":
-            _gltf_images(c, out)
+            _gltf_images(c, out, made)
         elif c.bakes and isinstance(c.result, dict):
             _bakes(c, out)
 
 
-def _gltf_images(c, out: Path) -> None:
+def _gltf_images(c, out: Path, made: dict) -> None:
+    """``c``'s textures glTF cannot hold written as PNG; ``made``: source file -> PNG of this output
+    (a file shared by materials written once; two files of one name in different folders, two PNGs)."""
     for stmt in [s for s in GLTF_TEXTURE_SLOTS if s in c.textures]:
         name = c.textures[stmt]
         if Path(str(name)).suffix.lower() in GLTF_FORMATS:
             continue
-        dst = out.parent / f"{out.stem}.{_safe(Path(str(name).replace(chr(92), '/')).stem)}.png"
+        src = _file(c, name).resolve()
+        stem = f"{out.stem}.{_safe(Path(str(name).replace(chr(92), '/')).stem)}"
+        dst, k = out.parent / f"{stem}.png", 1
+        while src not in made and dst in made.values():
+            k += 1
+            dst = out.parent / f"{stem}-{k}.png"
         try:
-            to_png(_file(c, name), dst)
+            if src not in made:
+                made[src] = to_png(src, dst)
+            dst = made[src]
         except ValueError as e:
             del c.textures[stmt]
             c.warnings.append(f"{stmt} {name}: glTF allows PNG and JPEG images only, and {e}: dropped")
