@@ -20,6 +20,12 @@ plausible models, and fits a *target* to each:
   (refused with a message where that model is not installed);
 * any registered model: :func:`plausible.fit`.
 
+What a reflection model does not hold is converted beside the fit (an MTL's glass as Mitsuba's
+``dielectric``/``thindielectric`` or glTF's transmission, its ``d`` as a ``mask`` or glTF's alpha,
+its ``Ke`` as glTF's emission), an exactly Lambertian source is written exactly (not fitted), a
+candidate that renders other than it evaluates is never chosen (:func:`degenerate`), and a material
+that cannot be converted is skipped (:attr:`Conversion.skipped`), the rest converted.
+
 Each :class:`Converted` holds the target's parameters, every fitting metric's
 figure, the albedo of source and target at 0, 45 and 75 degrees (the target's
 by Mitsuba's own sampler for a Mitsuba target) and warnings where the target
@@ -47,8 +53,9 @@ import numpy as np
 from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
 from .textures import GLTF_TEXTURE_SLOTS, prepare
 
-__all__ = ["Conversion", "Converted", "OUTPUTS", "Source", "TOLERANCE", "albedo_check", "check_output", "convert",
-           "mitsuba_xml", "read_sources"]
+__all__ = ["Conversion", "Converted", "METALLIC_MARGIN", "OUTPUTS", "Source", "TOLERANCE", "albedo_check",
+           "check_output", "convert", "degenerate", "lambertian_albedo", "metallic_decision", "mitsuba_xml",
+           "read_sources"]
 
 #: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
 #: conversion of a conserving source is expected to keep; beyond it a warning.
