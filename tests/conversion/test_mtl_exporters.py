@@ -296,3 +296,26 @@ def test_the_issues_metal_converts_to_a_target_that_reflects(tmp_path):
     for t, v in c.albedo.items():                         # Mitsuba's own sampler against the source
         assert v["max_abs_difference"] < 0.05, (t, v)
     assert not c.warnings
+
+
+@pytest.mark.parametrize("fitted, ends, kept", [(1.0, (1.05, 2.0), 0.0),     # within 10 %: the better end
+                                                (0.5, (3.0, 1.0), 0.3),      # 50 % lower: the fraction kept
+                                                (0.95, (1.2, 1.0), 1.0)])    # 5 % lower: metallic 1
+def test_a_fractional_metallic_is_kept_only_where_it_lowers_the_figure_by_the_margin(monkeypatch, fitted, ends, kept):
+    from plausible.conversion import METALLIC_MARGIN, metallic_decision
+
+    assert METALLIC_MARGIN == 0.10
+    fake = {0.0: ends[0], 1.0: ends[1]}
+
+    def fit_family(model, fam, metric, probe=None, target=None, hard=False):
+        v = dict(fam.fixed)["metallic"]
+        return CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": v}, {}, {}, {}, 0, fake[v], "gltf-pbr")
+
+    monkeypatch.setattr(CM, "fit_family", fit_family)
+    r = CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": 0.3}, {"metallic": 0.3}, {}, {}, 0, fitted, "gltf-pbr")
+    notes = []
+    out = metallic_decision(None, r, "perceptual", None, None, notes)
+    assert out.dict["metallic"] == kept and len(notes) == 1
+    # a metallic already at an end is not refitted
+    end = CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": 1.0}, {"metallic": 1.0}, {}, {}, 0, 9.0, "gltf-pbr")
+    assert metallic_decision(None, end, "perceptual", None, None, []) is end
