@@ -276,7 +276,7 @@ def _defaults(m: MtlMaterial) -> None:
     if d is not None and tr is not None and abs(d - (1.0 - tr)) > 1e-9:
         m.notes.append(f"d {d:g} and Tr {tr:g} disagree (Tr = 1 - d): d read")
     m.d = d if d is not None else (1.0 - tr if tr is not None else 1.0)
-    if m.d == 0.0:
+    if m.d == 0.0 and m.illum not in GLASS:          # glass: d is not read (its transparency is the glass)
         said = "d 0" if d is not None else "Tr 1"
         m.warnings.append(f"{said} (fully transparent) read as opaque: exporters write it for opaque materials "
                           f"(Tr taken for d); the material would be invisible")
