@@ -664,6 +664,9 @@ def convert_cmd(source, to, out, metric, as_json):
 
 
 def _convert_table(res, path):
+    if not res.items:
+        console.print(f"no material converted ({len(res.skipped)} skipped): nothing written")
+        return
     t = Table()
     for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "warnings"):
         t.add_column(col)
