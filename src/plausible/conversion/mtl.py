@@ -27,7 +27,9 @@ gives the reasons):
   channel conserves energy everywhere; it is nearly flat in incidence, about
   ``Ks`` for ``Ns >= 20`` and less for broad highlights (``0.80 Ks`` at normal
   incidence for ``Ns = 5``, ``0.375 Ks`` for ``Ns = 0``: masking, and facets that
-  reflect below the horizon).  The reciprocal Blinn lobe ``Ks c(Ns) (N.H)^Ns``
+  reflect below the horizon; the usual normalised Blinn-Phong, the same without ``G``, gives
+  ``0.50 Ks`` there, and creates energy at grazing incidence: 1.93 ``Ks`` at 75 degrees, 5.74 at 85
+  for ``Ns = 0`` -- the reason ``G`` is kept, besides Blinn having it; docs/convert.md).  The reciprocal Blinn lobe ``Ks c(Ns) (N.H)^Ns``
   (no division by the cosines) that an earlier version read falls with
   incidence as ``cos^2(theta)`` for sharp highlights (0.60, 0.32, 0.08 at 0, 45,
   75 degrees for ``Ks = 0.6``, ``Ns = 30``): it drops both ``1/cos`` that the
