@@ -319,3 +319,17 @@ def test_a_fractional_metallic_is_kept_only_where_it_lowers_the_figure_by_the_ma
     # a metallic already at an end is not refitted
     end = CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": 1.0}, {"metallic": 1.0}, {}, {}, 0, 9.0, "gltf-pbr")
     assert metallic_decision(None, end, "perceptual", None, None, []) is end
+
+
+def test_ns_0_reads_as_0_375_ks_with_blinns_g_against_one_half_without_it():
+    """The normalisation Ns is read with (docs/convert.md): at Ns 0, D = 1/pi; without G the albedo at
+    normal incidence is the closed form int D / (4 cos) cos dw = 2 pi / (4 pi) = 1/2; with the V-groove G
+    it is 0.375 (the reading), and without G it exceeds 1 at grazing incidence (energy created)."""
+    from plausible.conversion.mtl import highlight_spec
+
+    read = plausible.make(highlight_spec([1.0, 1.0, 1.0], 0.0))
+    no_g = plausible.make(highlight_spec([1.0, 1.0, 1.0], 0.0).replace("geometry=vgroove", "geometry=none"))
+    a_read = np.asarray(plausible.albedo_curve(read, thetas_deg=[0, 75]).value, float).reshape(2, -1)[:, 0]
+    a_no_g = np.asarray(plausible.albedo_curve(no_g, thetas_deg=[0, 75]).value, float).reshape(2, -1)[:, 0]
+    assert a_no_g[0] == pytest.approx(0.5, abs=1e-4) and a_read[0] == pytest.approx(0.375, abs=1e-3)
+    assert a_no_g[1] > 1.5 and a_read[1] < 1.0
