@@ -821,24 +821,36 @@ def convert_cmd(source, to, out, metric, as_json):
         if out != "-":
             check_output(out, to)          # a bad --out is refused before minutes of fitting
         res = convert(source, to=to, metric=metric)
-        if out == "-":                     # the file's text alone on stdout: .gltf for glTF, else .json
+        if out == "-" and res.items:       # the file's text alone on stdout: .gltf for glTF, else .json
             click.echo(res.text(".gltf" if res.to == "gltf" else ".json", Path.cwd()), nl=False)
-            return
-        path = res.write(out)
+        path = res.write(out) if out != "-" and res.items else None
     except ValueError as e:
         _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))
     if as_json:
         _echo_json(res.to_json())
+    elif out != "-":
+        _convert_table(res, path)
+    for s in res.skipped:
+        click.echo(f"warning: {s['skipped']}", err=True)
+    if res.skipped:
+        raise SystemExit(1)                # some materials skipped: the rest converted and written
+
+
+def _convert_table(res, path):
+    if not res.items:
+        console.print(f"no material converted ({len(res.skipped)} skipped): nothing written")
         return
     t = Table()
     for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "warnings"):
         t.add_column(col)
     for c in res.items:
-        diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo)
-        t.add_row(escape(c.name), escape(c.target), f"{c.errors['perceptual']:.3g}", diffs,
+        diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo) or "- (not fitted)"
+        perceptual = c.errors.get("perceptual")
+        t.add_row(escape(c.name), escape(c.target), "-" if perceptual is None else f"{perceptual:.3g}", diffs,
                   escape("; ".join(c.warnings)) or "-")
     console.print(t)
-    console.print(f"wrote {escape(str(path))}")
+    if path is not None:
+        console.print(f"wrote {escape(str(path))}")
 
 
 @main.command("convert-table")

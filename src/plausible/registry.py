@@ -9,6 +9,14 @@ from .params import ModelInfo, provide_model_builder
 
 _REGISTRY: dict[str, ModelInfo] = {}
 _LOADED = False
+#: Builds a sum from its parts, ``[(model, scale or None), ...]``: :class:`plausible.models.sum.Sum`,
+#: given by that module as the registry loads it (:func:`provide_sum`; the registry imports no model).
+_SUM_BUILDER: list = []
+
+
+def provide_sum(build) -> None:
+    """Give :func:`make_from_spec` the function that builds a sum of parts (``"a + b"``)."""
+    _SUM_BUILDER[:] = [build]
 
 
 def register(name: str, description: str, *, reciprocal: bool = True,
@@ -84,9 +92,9 @@ def info(name: str) -> ModelInfo:
 
 def make(name: str, /, **params):
     """Build the registered model ``name`` with ``params`` (defaults for the rest).
-    ``name`` may be a spec, ``"ashikhmin-shirley:nu=10"`` or ``"material:NAME@FIT"``
-    (:func:`make_from_spec`; ``params`` then add to or override the spec's)."""
-    if isinstance(name, str) and ":" in name:
+    ``name`` may be a spec, ``"ashikhmin-shirley:nu=10"``, ``"material:NAME@FIT"`` or a sum
+    ``"a + b"`` (:func:`make_from_spec`; ``params`` then add to or override the spec's)."""
+    if isinstance(name, str) and (":" in name or " + " in name):
         return make_from_spec(name, **params)
     return info(name).cls(**params)
 
@@ -151,6 +159,51 @@ def split_spec(spec: str) -> list[str]:
     return parts
 
 
+def split_sum(spec: str) -> list[str]:
+    """The terms of a sum spec ``"a + b + ..."``: split at ``" + "`` outside square brackets
+    (a nested model may be a sum: ``pumped-up:base=[a + b]``); one term for a plain spec.
+
+    >>> split_sum("lambertian:rd=0.5 + 0.25 * pumped-up:base=[lambertian + lambertian]")
+    ['lambertian:rd=0.5', '0.25 * pumped-up:base=[lambertian + lambertian]']
+    """
+    terms, cur, depth, i = [], "", 0, 0
+    while i < len(spec):
+        ch = spec[i]
+        depth += (ch == "[") - (ch == "]")
+        if depth == 0 and spec.startswith(" + ", i):
+            terms.append(cur.strip())
+            cur, i = "", i + 3
+            continue
+        cur += ch
+        i += 1
+    return terms + [cur.strip()]
+
+
+def _scaled_term(term: str):
+    """``(spec, scale)`` of one term of a sum: ``"SCALE * spec"`` (``SCALE`` a number or ``r,g,b``,
+    the part's scale of :class:`~plausible.models.sum.Sum`) or ``"spec"`` (scale None)."""
+    head, star, rest = term.partition(" * ")
+    if star and "[" not in head:
+        try:
+            scale = [float(x) for x in head.split(",")]
+        except ValueError:
+            raise ValueError(f"sum term {term!r}: the scale before ' * ' must be a number or r,g,b, "
+                             f"got {head.strip()!r}") from None
+        return rest.strip(), (scale[0] if len(scale) == 1 else scale)
+    return term, None
+
+
+def _make_sum(spec: str, terms: list, extra: dict):
+    """The :class:`~plausible.models.sum.Sum` of the terms of ``spec`` (:func:`split_sum`)."""
+    if extra:
+        raise ValueError(f"model spec {spec!r} is a sum: give parameters inside its terms, not beside it "
+                         f"(got {', '.join(sorted(extra))})")
+    if any(not t for t in terms):
+        raise ValueError(f"model spec {spec!r}: every term of a sum 'a + b' needs a model spec (an empty term)")
+    parts = [_scaled_term(t) for t in terms]
+    return _SUM_BUILDER[0]([(make_from_spec(s), k) for s, k in parts])
+
+
 def spec_of(model) -> str:
     """The spec string of a model, ``"name:k=v:..."``, that :func:`make_from_spec`
     reads back into an equal model (:meth:`plausible.bxdf.BxDF.spec`); anything
@@ -165,7 +218,15 @@ def spec_of(model) -> str:
 
 def is_spec(text: str) -> bool:
     """Whether ``text`` reads as the spec of a registered entry that takes its own
-    spec items (``material:NAME@FIT``, whose fit key holds a '/', is not a path)."""
+    spec items (``material:NAME@FIT``, whose fit key holds a '/', is not a path), or a sum
+    ``"a + b"`` whose terms each name a registered entry."""
+    terms = split_sum(text.strip())
+    if len(terms) > 1:              # a sum: every term a registered entry's spec
+        _load()
+        try:
+            return all(split_spec(_scaled_term(t)[0])[0].strip() in _REGISTRY for t in terms)
+        except ValueError:
+            return False
     try:
         name = split_spec(text.strip())[0].strip() if ":" in text else ""
     except ValueError:              # unbalanced brackets: not a spec
@@ -179,9 +240,14 @@ def make_from_spec(spec: str, **extra):
     a nested model spec in square brackets, ``"pumped-up:base=[reciprocal-phong:n=20]"``).
     An entry whose class reads its own spec items (``from_spec_items``) gets them:
     a published fit of a real material, ``"material:NAME@FIT"``
-    (:class:`plausible.catalogue.entry.Material`)."""
-    name, *assign = split_spec(spec)
+    (:class:`plausible.catalogue.entry.Material`).  A sum ``"a + b"`` (terms :func:`split_sum`, each
+    ``spec`` or ``SCALE * spec``) is the :class:`~plausible.models.sum.Sum` of its terms, what
+    :meth:`~plausible.models.sum.Sum.spec` writes."""
     _load()
+    terms = split_sum(spec)
+    if len(terms) > 1:
+        return _make_sum(spec, terms, extra)
+    name, *assign = split_spec(spec)
     reader = getattr(getattr(_REGISTRY.get(name.strip()), "cls", None), "from_spec_items", None)
     if reader is not None:
         return reader([a.strip() for a in assign], **extra)

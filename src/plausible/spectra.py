@@ -128,6 +128,21 @@ def _rgb_to_xyz_matrix():
     return p * scale
 
 
+def srgb_to_linear(c):
+    """The sRGB transfer function undone (IEC 61966-2-1), as Mitsuba's
+    ``mi.math.srgb_to_linear``: ``c / 12.92`` up to 0.04045, else
+    ``((c + 0.055) / 1.055)^2.4``."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, np.power((np.maximum(c, 0.04045) + 0.055) / 1.055, 2.4))
+
+
+def linear_to_srgb(c):
+    """The sRGB transfer function (IEC 61966-2-1), the inverse of :func:`srgb_to_linear`:
+    ``12.92 c`` up to 0.0031308, else ``1.055 c^(1/2.4) - 0.055``."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1.0 / 2.4) - 0.055)
+
+
 def xyz_to_linear_srgb(xyz):
     """Linear sRGB (BT.709 primaries, D65 white) of XYZ values (last axis of size 3)."""
     m = np.linalg.inv(_rgb_to_xyz_matrix())

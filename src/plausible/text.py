@@ -151,8 +151,8 @@ def replacing(*paths):
         raise
 
 
-def write_atomic(path, text: str) -> None:
-    """Write ``text`` to ``path`` whole or not at all (:func:`replacing`)."""
+def write_atomic(path, text: str | bytes) -> None:
+    """Write ``text`` (or ``bytes``) to ``path`` whole or not at all (:func:`replacing`)."""
     write_all_atomic({path: text})
 
 
@@ -162,7 +162,7 @@ def write_all_atomic(files: dict) -> None:
     with replacing(*files) as tmps:
         for t, text in zip(tmps, files.values()):
             try:
-                with open(t, "w", encoding="utf-8") as f:
+                with (open(t, "wb") if isinstance(text, bytes) else open(t, "w", encoding="utf-8")) as f:
                     f.write(text)
             except OSError as e:    # a full disk names no file: this one (replacing names its path)
                 if e.filename is None:

@@ -188,7 +188,8 @@ def test_textures_of_an_mtl_are_carried_into_the_mitsuba_dict(tmp_path):
     c = convert(str(tmp_path / "lib.mtl")).items[0]
     assert c.params["reflectance"] == {"type": "bitmap", "filename": "wood.png"}
     assert c.textures == {"map_Kd": "wood.png", "map_bump": "b.png"}
-    assert any("map_bump b.png: carried by reference only" in n for n in c.notes)
+    # a bump map dropped is a warning (issue 41: a note before)
+    assert any("map_bump b.png: dropped, carried by reference only" in w for w in c.warnings)
 
 
 @pytest.mark.parametrize("to, words", [("mitsuba:plastic", "mitsuba:roughconductor"),
@@ -402,7 +403,9 @@ def test_textures_go_to_the_coats_base_and_the_lobe_of_blendbsdf_tir(tmp_path):
     d = fam.bsdf_dict({"bsdf_1.alpha": 0.05, "weight": 0.4, "bsdf_0.ext_ior": 1.4, "bsdf_0.alpha": 0.3},
                       {"bsdf_0.diffuse_reflectance": 0.5, "bsdf_1.specular_reflectance": 0.3})
     notes = []
-    out = _with_textures(d, "blendbsdf-tir", {"map_Kd": "wood.png", "map_Ks": "spec.png"}, notes)
+    out, bakes = _with_textures(d, "blendbsdf-tir", {"map_Kd": "wood.png", "map_Ks": "spec.png"}, notes, [])
+    assert bakes == {"bsdf_0.diffuse_reflectance": ("map_Kd", [0.5, 0.5, 0.5]),      # Kd x map_Kd, Ks x map_Ks:
+                     "bsdf_1.specular_reflectance": ("map_Ks", [0.3, 0.3, 0.3])}     # baked on write
     assert out["bsdf_0"]["diffuse_reflectance"] == {"type": "bitmap", "filename": "wood.png"}
     assert out["bsdf_1"]["specular_reflectance"] == {"type": "bitmap", "filename": "spec.png"}
     assert d["bsdf_0"]["diffuse_reflectance"]["type"] == "rgb" and len(notes) == 2

@@ -120,7 +120,7 @@ def test_kd_plus_ks_above_one_is_noted(tmp_path):
 
 
 @pytest.mark.parametrize("line, words", [
-    ("illum 7", ["illum 7", "0 (", "3 ("]),
+    ("illum 11", ["illum must be one of the specification's illumination models 0-10, got 11"]),
     ("illum two", ["illum must be one integer"]),
     ("Ns -3", ["Ns must be one number in [0, 1e+06]", "-3"]),
     ("Ns lots", ["Ns must be one number", "lots"]),

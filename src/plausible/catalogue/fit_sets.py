@@ -334,7 +334,7 @@ def material(name: str, fit: str = DEFAULT_FIT) -> Sum:
     parts = []
     for k, t in enumerate(ts):
         parts.append(build_term(t, f"{fs.file}: {name}: term {k + 1}"))
-    return Sum(parts, name=f"{name}@{fs.key}")
+    return Sum(parts, name=f"{name}@{fs.key}", spec=f"material:{name}@{fs.key}")
 
 
 def parse_spec(spec: str) -> tuple[str, str]:

@@ -20,6 +20,12 @@ plausible models, and fits a *target* to each:
   (refused with a message where that model is not installed);
 * any registered model: :func:`plausible.fit`.
 
+What a reflection model does not hold is converted beside the fit (an MTL's glass as Mitsuba's
+``dielectric``/``thindielectric`` or glTF's transmission, its ``d`` as a ``mask`` or glTF's alpha,
+its ``Ke`` as glTF's emission), an exactly Lambertian source is written exactly (not fitted), a
+candidate that renders other than it evaluates is never chosen (:func:`degenerate`), and a material
+that cannot be converted is skipped (:attr:`Conversion.skipped`), the rest converted.
+
 Each :class:`Converted` holds the target's parameters, every fitting metric's
 figure, the albedo of source and target at 0, 45 and 75 degrees (the target's
 by Mitsuba's own sampler for a Mitsuba target) and warnings where the target
@@ -45,9 +51,11 @@ from pathlib import Path
 import numpy as np
 
 from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
+from .textures import GLTF_TEXTURE_SLOTS, prepare
 
-__all__ = ["Conversion", "Converted", "OUTPUTS", "Source", "TOLERANCE", "albedo_check", "check_output", "convert",
-           "mitsuba_xml", "read_sources"]
+__all__ = ["Conversion", "Converted", "METALLIC_MARGIN", "OUTPUTS", "Source", "TOLERANCE", "albedo_check",
+           "check_output", "convert", "degenerate", "lambertian_albedo", "metallic_decision", "mitsuba_xml",
+           "read_sources"]
 
 #: The largest albedo difference (any channel, at each of :data:`REPORT_THETAS`) a
 #: conversion of a conserving source is expected to keep; beyond it a warning.
@@ -67,6 +75,13 @@ class Source:
     textures: dict = field(default_factory=dict)
     #: The folder the texture file names are relative to (an ``.mtl`` file's own); None: as given.
     folder: str | None = None
+    #: What the reading drops or changes that a user must know (the report's warnings).
+    warnings: list = field(default_factory=list)
+    #: What a reflection model does not hold (:class:`plausible.conversion.mtl.Reading`: glass,
+    #: opacity, emission).
+    surface: dict = field(default_factory=dict)
+    #: Why the material cannot be converted (it is skipped, the rest converted); None: it can.
+    refused: str | None = None
 
 
 @dataclass
@@ -87,11 +102,17 @@ class Converted:
     #: The folder the texture file names are relative to (the source's; :meth:`Conversion.write`
     #: writes them relative to the output file's folder).
     folder: str | None = None
+    #: glTF properties beside the BRDF (:func:`plausible.export.gltf.gltf_material`'s ``surface``:
+    #: ``alpha``, ``emissive``, ``transmission``, ``ior``).
+    surface: dict = field(default_factory=dict)
+    #: Textures to bake into a Mitsuba result (``Kd x map_Kd``): dotted slot -> (statement, the fitted
+    #: constant colour the texture multiplies); :meth:`Conversion.write` bakes them beside the output.
+    bakes: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"name": self.name, "source": self.source, "target": self.target, "params": self.params,
                 "error": self.errors, "albedo": self.albedo, "warnings": self.warnings, "notes": self.notes,
-                "textures": self.textures}
+                "textures": self.textures, "surface": self.surface}
 
 
 @dataclass
@@ -101,9 +122,11 @@ class Conversion:
     to: str
     metric: str
     items: list
+    #: The materials not converted: ``{"name", "skipped": why}`` (a warning each; the command exits 1).
+    skipped: list = field(default_factory=list)
 
     def to_json(self) -> list:
-        return [c.to_dict() for c in self.items]
+        return [c.to_dict() for c in self.items] + [dict(s) for s in self.skipped]
 
     def mitsuba_dicts(self, where=None) -> dict:
         """``{name: dict for mi.load_dict}`` (a registered-model target: its plausible plugin,
@@ -130,7 +153,12 @@ class Conversion:
         from ..text import write_atomic
 
         p = Path(path)
-        text = self.text(check_output(p, self.to), p.resolve().parent)
+        suffix = check_output(p, self.to)
+        if not self.items:
+            raise ValueError(f"out: no material of the source was converted ({len(self.skipped)} skipped): "
+                             f"{str(path)!r} not written")
+        prepare(self, p, suffix)        # textures glTF cannot hold as PNG, Kd x map_Kd baked for Mitsuba
+        text = self.text(suffix, p.resolve().parent)
         try:
             write_atomic(p, text)
         except OSError as e:
@@ -144,7 +172,9 @@ class Conversion:
             from ..export.gltf import gltf_document
 
             return json.dumps(gltf_document({c.name: c.result for c in self.items},
-                                            textures=self.gltf_textures(where)), indent=1) + "\n"
+                                            textures=self.gltf_textures(where),
+                                            surfaces={c.name: c.surface for c in self.items if c.surface}),
+                              indent=1) + "\n"
         if suffix == ".json":
             return json.dumps(self.mitsuba_dicts(where), indent=2) + "\n"
         if suffix == ".xml":
@@ -243,22 +273,20 @@ def read_sources(source) -> list[Source]:
         if not Path(text).is_file():
             raise ValueError(f"source file {text!r} not found")
         if suffix == ".mtl":
-            from .mtl import as_model, read_mtl
+            from .mtl import read_mtl, reading
 
             out = []
             for m in read_mtl(text):
-                model, spec, notes = as_model(m)
-                out.append(Source(m.name, model, spec, notes, m.texture_files, str(Path(text).resolve().parent)))
+                r = reading(m)
+                out.append(Source(m.name, r.model, r.spec, r.notes, m.texture_files, str(Path(text).resolve().parent),
+                                  r.warnings, r.surface, r.refused))
             return out
         if suffix == ".xml":
             return _xml_sources(text)
         return _json_sources(text)
-    if " + " in text:
-        from ..models.sum import Sum
-
-        parts = [registry.make_from_spec(s.strip()) for s in text.split(" + ")]
-        return [Source("sum", Sum(parts, name="sum"), " + ".join(s.strip() for s in text.split(" + ")))]
-    m = registry.make_from_spec(text)
+    m = registry.make_from_spec(text)         # a sum "a + b" too (registry.split_sum)
+    if len(registry.split_sum(text)) > 1:
+        return [Source("sum", m, m.spec())]
     spec = registry.spec_of(m)
     return [Source(getattr(m, "label", None) or m.name, m, text if spec == repr(m) else spec)]
 
@@ -359,15 +387,98 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
         from .. import registry
 
         registry.info(to)    # a clear error for an unknown name
-    items = []
+    items, skipped = [], []
     for src in read_sources(source):
+        why = src.refused or _refusal(src, to)
+        if why:
+            skipped.append({"name": src.name, "skipped": why})
+            continue
+        if "glass" in src.surface:
+            items.append(_glass(src, to))
+            continue
         src_alb = _source_albedo(src.model)
-        warn = _conserving(src, src_alb)
+        warn = list(src.warnings) + _conserving(src, src_alb)
         if to.startswith("mitsuba") or to == "gltf":
-            items.append(_to_mitsuba(src, family, metric, src_alb, warn))
+            c = _to_mitsuba(src, family, metric, src_alb, warn)
         else:
-            items.append(_to_model(src, to, metric, starts, src_alb, warn))
-    return Conversion(to, metric, items)
+            c = _to_model(src, to, metric, starts, src_alb, warn)
+        items.append(_with_surface(c, src, to))
+    return Conversion(to, metric, items, skipped)
+
+
+def _refusal(src, to: str):
+    """Why ``src`` cannot be converted to ``to`` (None: it can): glass goes to ``mitsuba`` and ``gltf``
+    only (a reflection model, or a Mitsuba family forced, has no transmission)."""
+    if "glass" in src.surface and to not in ("mitsuba", "gltf"):
+        return (f"material {src.name!r} is glass (Mitsuba's {src.surface['glass']}): it converts to 'mitsuba' or "
+                f"'gltf', not to {to!r} (a reflection model has no transmission): skipped")
+    return None
+
+
+def _glass(src, to: str) -> Converted:
+    """Glass as its statements give it (:func:`plausible.conversion.mtl.reading`): Mitsuba's smooth
+    ``dielectric``/``thindielectric`` of index ``Ni`` transmitting ``Tf``, or glTF's
+    ``KHR_materials_transmission`` (factor 1) with ``KHR_materials_ior`` and ``Tf`` as the base colour
+    (glTF tints the transmission by it); not fitted (no error figures, no albedo)."""
+    from .. import registry
+
+    sf = src.surface
+    notes = list(src.notes) + ["glass: converted by its statements, not fitted (no error figures)"]
+    if to == "gltf":
+        params = {"base_color": sf["transmittance"], "metallic": 0.0, "roughness": 0.01}
+        notes.append("glTF: KHR_materials_transmission 1 and KHR_materials_ior; roughness 0.01 (the model's "
+                     "smallest), thin-walled (no KHR_materials_volume: the thickness of a mesh is unknown here)")
+        return Converted(src.name, src.spec, "gltf", params, {}, {}, list(src.warnings), notes, dict(src.textures),
+                         registry.make(GLTF_MODEL, **params), src.folder,
+                         {"transmission": 1.0, "ior": float(sf["ior"])})
+    d = {"type": sf["glass"], "int_ior": float(sf["ior"]), "ext_ior": 1.0}
+    if any(x != 1.0 for x in sf["transmittance"]):
+        d["specular_transmittance"] = {"type": "rgb", "value": list(sf["transmittance"])}
+    return Converted(src.name, src.spec, f"mitsuba:{sf['glass']}", d, {}, {}, list(src.warnings), notes,
+                     dict(src.textures), d, src.folder)
+
+
+def _with_surface(c: Converted, src, to: str) -> Converted:
+    """``c`` with what its source has beside its reflection (``src.surface``): the opacity ``d`` as
+    Mitsuba's ``mask`` around the BSDF or glTF's alpha (``alphaMode BLEND``), ``map_d`` as the
+    ``mask``'s opacity texture, the emission ``Ke`` as glTF's ``emissiveFactor``; what the target
+    cannot hold is a warning."""
+    sf = src.surface
+    if not sf:
+        return c
+    mitsuba = isinstance(c.result, dict)
+    if "opacity" in sf or "opacity_map" in sf:
+        if mitsuba:
+            opacity = ({"type": "bitmap", "filename": sf["opacity_map"], "raw": True} if "opacity_map" in sf
+                       else float(sf["opacity"]))
+            c.result = c.params = {"type": "mask", "opacity": opacity, "bsdf": c.result}
+            c.notes.append(f"Mitsuba mask of opacity {sf.get('opacity_map', sf.get('opacity'))}"
+                           + (" (map_d; d is not multiplied in)" if "opacity_map" in sf and "opacity" in sf else ""))
+        elif to == "gltf":
+            if "opacity" in sf:
+                c.surface["alpha"] = float(sf["opacity"])
+                c.notes.append(f"d {sf['opacity']:g}: glTF alphaMode BLEND, baseColorFactor alpha {sf['opacity']:g}")
+            if "opacity_map" in sf:
+                c.warnings.append(f"map_d {sf['opacity_map']}: dropped (glTF reads opacity from the base colour "
+                                  f"texture's alpha only)")
+        else:
+            c.warnings.append(f"the opacity (d {sf.get('opacity', 1.0):g}, map_d {sf.get('opacity_map', '-')}) is "
+                              f"dropped: a registered model has none")
+    if "emission" in sf:
+        ke = sf["emission"]
+        if to == "gltf":
+            c.surface["emissive"] = list(ke)
+            c.notes.append(f"Ke {_colour(ke)}: glTF emissiveFactor" + (" (with KHR_materials_emissive_strength "
+                                                                          f"{max(ke):g})" if max(ke) > 1 else ""))
+        else:
+            c.warnings.append(f"Ke {_colour(ke)} (emission) dropped: a BSDF does not emit; in Mitsuba give the "
+                              f"shapes of this material an emitter {{'type': 'area', 'radiance': {{'type': 'rgb', "
+                              f"'value': {list(ke)}}}}}")
+    return c
+
+
+def _colour(c) -> str:
+    return " ".join(f"{float(x):g}" for x in c)
 
 
 def _to_mitsuba(src, family, metric, src_alb, warn):
@@ -377,35 +488,26 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     probe = CM.probe_for(src.model)
     # the source's albedo at the probe's incidences: computed once, with the report's (CONSERVE_THETAS)
     target = CM.source_target(src.model, probe, src_alb[[CONSERVE_THETAS.index(t) for t in CM.PROBE_THETAS]])
-    if family is None:
-        families, why = CM.candidates(src.model, src_alb)
-        fits = [CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families]
-        r = min(fits, key=lambda x: x.figure)
-        tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
-        others = [x for x in fits if x.key not in CM.BAND_FAMILIES]
-        if r.key in CM.BAND_FAMILIES and others:
-            # kept only where the band needs it or the metric's own figure is lower too
-            o = min(others, key=lambda x: x.figure)
-            if o.band <= CM.BAND_HARD and o.errors[metric] <= r.errors[metric]:
-                tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
-                          f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
-                r = o
-        if r.band > CM.BAND_HARD:
-            # the band as a constraint of every candidate's fit, the lowest figure of those kept
-            hard = [CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True) for f in families]
-            r = min(hard, key=lambda x: x.figure)
-            tried += (f"; the albedo {min(fits, key=lambda x: x.figure).band:.3f} off at most, beyond "
-                      f"{CM.BAND_HARD}: refitted with the band as a constraint: "
-                      + ", ".join(f"{x.key} {x.figure:.3g} (albedo {x.band:.3f} off)" for x in hard))
-        family = r.key
-        notes.append(f"mitsuba:{family} chosen: {why}; figure minimised: {tried}")
+    rd = lambertian_albedo(src.model, src_alb)
+    if rd is not None and family in (None, "diffuse", GLTF_MODEL):
+        family = family or "diffuse"
+        r = _exact_diffuse(rd, family, metric, probe, target)
+        notes.append(f"a Lambertian source (albedo {_colour(np.round(rd, 6))} at every incidence): "
+                     + ("mitsuba:diffuse of that reflectance" if family == "diffuse" else
+                        "glTF metallic 0, specular 0 (KHR_materials_specular), base colour that albedo: "
+                        "exactly Lambertian"))
+    elif family is None:
+        r, family = _choose(src, metric, probe, target, src_alb, notes)
     else:
         r = CM.fit_family(src.model, family, metric, probe=probe, target=target)
         if r.band > CM.BAND_HARD:
             r = CM.fit_family(src.model, family, metric, probe=probe, target=target, hard=True)
             notes.append(f"fitted with the band as a constraint (the albedo beyond {CM.BAND_HARD} off without it)")
+        if family == GLTF_MODEL:
+            r = metallic_decision(src.model, r, metric, probe, target, notes)
     textures = dict(src.textures)
-    d = _with_textures(r.dict, family, textures, notes)
+    warn = list(warn)
+    d, bakes = _with_textures(r.dict, family, textures, notes, warn)
     tgt_alb = CM.sampler_albedo(r.dict)
     alb = _albedo_report(src_alb, tgt_alb)
     warn = warn + _albedo_warnings(alb)
@@ -416,7 +518,127 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
                          model, src.folder)
     return Converted(src.name, src.spec, f"mitsuba:{r.family}", d, r.errors, alb, warn, notes, textures, d,
-                     src.folder)
+                     src.folder, bakes=bakes)
+
+
+def _choose(src, metric, probe, target, src_alb, notes):
+    """``(fit, family)``: the best candidate (:func:`.mitsuba.candidates`) by the figure minimised, of
+    those that render what they evaluate to (:func:`degenerate`), refitted with the band as a
+    constraint where it misses the band; the choice noted."""
+    from . import mitsuba as CM
+
+    families, why = CM.candidates(src.model, src_alb)
+    fits = _usable([CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families],
+                   probe, notes)
+    r = min(fits, key=lambda x: x.figure)
+    tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
+    others = [x for x in fits if x.key not in CM.BAND_FAMILIES]
+    if r.key in CM.BAND_FAMILIES and others:
+        # kept only where the band needs it or the metric's own figure is lower too
+        o = min(others, key=lambda x: x.figure)
+        if o.band <= CM.BAND_HARD and o.errors[metric] <= r.errors[metric]:
+            tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
+                      f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
+            r = o
+    if r.band > CM.BAND_HARD:
+        # the band as a constraint of every candidate's fit, the lowest figure of those kept
+        hard = _usable([CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True)
+                        for f in families], probe, notes)
+        r = min(hard, key=lambda x: x.figure)
+        tried += (f"; the albedo {min(fits, key=lambda x: x.figure).band:.3f} off at most, beyond "
+                  f"{CM.BAND_HARD}: refitted with the band as a constraint: "
+                  + ", ".join(f"{x.key} {x.figure:.3g} (albedo {x.band:.3f} off)" for x in hard))
+    notes.append(f"mitsuba:{r.key} chosen: {why}; figure minimised: {tried}")
+    return r, r.key
+
+
+def lambertian_albedo(model, src_alb, tol: float = 1e-6):
+    """The albedo (three channels) of a source that is exactly Lambertian -- every lobe it declares
+    diffuse and its albedo that lobe's at every probed incidence, within ``tol`` (an MTL ``illum 0-1``,
+    or ``Ks 0``) -- else None."""
+    from .mitsuba import diffuse_albedo
+
+    rd = diffuse_albedo(model)
+    if not np.all(np.isfinite(rd)) or not np.all(np.abs(np.asarray(src_alb, float) - rd) <= tol):
+        return None
+    return np.clip(rd, 0.0, 1.0)
+
+
+def _exact_diffuse(rd, family, metric, probe, target):
+    """The exactly Lambertian target of albedo ``rd``: Mitsuba's ``diffuse``, or ``gltf-pbr`` with
+    metallic 0 and specular 0 (its dielectric BRDF is then ``base_color / pi``), measured as a fit's
+    result is (:func:`.mitsuba.measure`)."""
+    from . import mitsuba as CM
+
+    colour = {"type": "rgb", "value": [float(x) for x in rd]}
+    d = ({"type": "diffuse", "reflectance": colour} if family == "diffuse" else
+         {"type": GLTF_MODEL, "base_color": colour, "metallic": 0.0, "roughness": 1.0, "specular": 0.0})
+    return CM.measure(d, family, probe, target, metric)
+
+
+#: A fractional glTF metallic is kept only where it lowers the figure minimised by this fraction
+#: against the better of metallic 0 and 1 (each fitted with metallic fixed); else that end.  The hook
+#: of the image-space score (issue 40): :func:`metallic_decision` compares ``figure``.
+METALLIC_MARGIN = 0.10
+
+
+def metallic_decision(model, r, metric, probe, target, notes, margin: float = METALLIC_MARGIN):
+    """The glTF fit ``r`` if its metallic is 0 or 1, or a fractional one lowers the figure by
+    ``margin`` (a fraction) against the better end refitted with metallic fixed; else that end.
+    (A fractional metallic mixes a metal into a dielectric: a red plastic becomes a red metal.)"""
+    from . import mitsuba as CM
+
+    m = float(r.point.get("metallic", r.dict.get("metallic", 0.0)))
+    if m in (0.0, 1.0):
+        return r
+    ends = [CM.fit_family(model, CM.gltf_fixed_metallic(v), metric, probe=probe, target=target, hard=r.hard)
+            for v in (0.0, 1.0)]
+    e = min(ends, key=lambda x: x.figure)
+    said = (f"figure minimised {r.figure:.3g} at the fitted metallic {m:.3g}, {e.figure:.3g} at metallic "
+            f"{e.dict['metallic']:g}")
+    if r.figure <= (1.0 - margin) * e.figure:
+        notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower)")
+        return r
+    notes.append(f"metallic {e.dict['metallic']:g}: {said} (a fractional metallic is kept only where it is more "
+                 f"than {margin:.0%} lower)")
+    return e
+
+
+#: Sample side of the check that a candidate renders what it evaluates to (:func:`degenerate`).
+DEGENERATE_SIDE = 64
+
+
+def degenerate(r, probe) -> str | None:
+    """Why the fitted candidate ``r`` is never an answer, or None: its value on the probe is NaN,
+    or Mitsuba's own sampler gives NaN or an albedo other than its evaluated one (by more than
+    0.05 + 10 %) at 0, 45, 75 degrees -- a ``blendbsdf-tir`` whose coat has a zero colour evaluates
+    to the conductor's lobe and samples to nothing."""
+    from . import mitsuba as CM
+
+    fc, alb = probe.measure(CM._load(r.dict))
+    if not (np.all(np.isfinite(fc)) and np.all(np.isfinite(alb))):
+        return f"{r.key}: evaluates to NaN"
+    rows = [int(np.argmin(np.abs(probe.thetas - math.radians(t)))) for t in REPORT_THETAS]
+    want = np.broadcast_to(alb[rows], (len(rows), 3))
+    got = CM.sampler_albedo(r.dict, side=DEGENERATE_SIDE)
+    if not np.all(np.isfinite(got)):
+        return f"{r.key}: its sampler gives NaN"
+    if np.any(np.abs(got - want) > 0.05 + 0.1 * want):
+        return (f"{r.key}: its sampler's albedo ({_colour(np.round(got.max(axis=1), 3))} at 0/45/75 degrees) is not "
+                f"its evaluated one ({_colour(np.round(want.max(axis=1), 3))}): it renders other than it evaluates")
+    return None
+
+
+def _usable(fits, probe, notes):
+    """``fits`` without the degenerate ones (:func:`degenerate`, each noted); all of them where none is usable."""
+    keep = []
+    for f in fits:
+        why = degenerate(f, probe)
+        if why:
+            notes.append(f"candidate rejected: {why}")
+        else:
+            keep.append(f)
+    return keep or fits
 
 
 #: Which Mitsuba parameter an MTL texture replaces, per family.
@@ -427,36 +649,41 @@ TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_r
                             "blendbsdf-tir": "bsdf_1.specular_reflectance"}}
 
 
-#: The glTF material's texture that an MTL texture becomes in a ``.gltf`` output (a reference to
-#: the file as the MTL names it; glTF multiplies ``baseColorTexture`` by ``baseColorFactor``, the
-#: fitted colour, as MTL multiplies ``map_Kd`` by ``Kd``).
-GLTF_TEXTURE_SLOTS = {"map_Kd": "baseColorTexture"}
-
-
-def _with_textures(d, family, textures, notes):
+def _with_textures(d, family, textures, notes, warn):
+    """``(dict, bakes)``: ``d`` with its slots' bitmaps (:data:`TEXTURE_SLOTS`) and the bakes ``Kd x
+    map_Kd`` (:attr:`Converted.bakes`: slot -> (statement, fitted colour)); a texture no slot takes is
+    noted, or a warning where a user sees it go (:data:`plausible.conversion.mtl.WARNED_TEXTURES`)."""
     import copy
 
     from . import mitsuba as CM
+    from .mtl import WARNED_TEXTURES
 
+    def dropped(stmt, where):
+        (warn if stmt in WARNED_TEXTURES else notes).append(
+            f"{stmt} {textures[stmt]}: dropped, carried by reference only (no {where} takes it)")
+
+    bakes = {}
+    d = copy.deepcopy(d)
     if family == GLTF_MODEL:
         for stmt in textures:
             if stmt in GLTF_TEXTURE_SLOTS:
                 notes.append(f"{stmt} {textures[stmt]}: the .gltf material's {GLTF_TEXTURE_SLOTS[stmt]} (times the "
                              f"fitted baseColorFactor, as MTL multiplies {stmt} by Kd; the fit used the constant colour)")
-            else:
-                notes.append(f"{stmt} {textures[stmt]}: carried by reference only (no glTF texture takes it)")
-        return copy.deepcopy(d)
-    d = copy.deepcopy(d)
+            elif stmt != "map_d":        # map_d: the opacity (_with_surface)
+                dropped(stmt, "glTF texture")
+        return d, bakes
     for stmt, slots in TEXTURE_SLOTS.items():
         if stmt in textures and family in slots:
             key = slots[family]
-            notes.append(f"{stmt} {textures[stmt]}: a bitmap texture in place of the fitted {key} "
-                         f"{CM.get_entry(d, key)['value']} (the fit used the constant colour)")
+            colour = CM.get_entry(d, key)["value"]
+            notes.append(f"{stmt} {textures[stmt]}: a bitmap texture of the fitted {key} {_colour(np.round(colour, 4))} "
+                         f"times the texture, baked beside the output (as MTL multiplies {stmt} by its colour)")
             CM.set_entry(d, key, {"type": "bitmap", "filename": textures[stmt]})
+            bakes[key] = (stmt, [float(x) for x in colour])
     for stmt in textures:
-        if stmt not in TEXTURE_SLOTS or family not in TEXTURE_SLOTS[stmt]:
-            notes.append(f"{stmt} {textures[stmt]}: carried by reference only (no {family} parameter takes it)")
-    return d
+        if (stmt not in TEXTURE_SLOTS or family not in TEXTURE_SLOTS[stmt]) and stmt != "map_d":
+            dropped(stmt, f"{family} parameter")
+    return d, bakes
 
 
 #: How far above 1 the target's measured albedo (its sampler's estimate, standard error below
@@ -558,8 +785,9 @@ def _xml_value(k, v):
         val = ", ".join(f"{x:.9g}" for x in np.broadcast_to(np.asarray(v["value"], float), (3,)))
         return f"<rgb name={quoteattr(k)} value={quoteattr(val)}/>"
     if isinstance(v, dict) and v.get("type") == "bitmap":
+        raw = '<boolean name="raw" value="true"/>' if v.get("raw") else ""
         return (f"<texture type=\"bitmap\" name={quoteattr(k)}><string name=\"filename\" "
-                f"value={quoteattr(v['filename'])}/></texture>")
+                f"value={quoteattr(v['filename'])}/>{raw}</texture>")
     if isinstance(v, bool):
         return f"<boolean name={quoteattr(k)} value=\"{str(v).lower()}\"/>"
     if isinstance(v, (int, float)):

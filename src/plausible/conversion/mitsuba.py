@@ -58,8 +58,8 @@ import numpy as np
 
 from ..fitting import metrics as M
 
-__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fit_family", "probe_for",
-           "sampler_albedo", "source_target"]
+__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fit_family", "gltf_fixed_metallic",
+           "measure", "probe_for", "sampler_albedo", "source_target"]
 
 #: Incidences (degrees) of the albedo comparison in every report.
 REPORT_THETAS = (0.0, 45.0, 75.0)
@@ -544,6 +544,26 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     band = float(np.max(np.abs(np.broadcast_to(alb, A.shape)[rows] - A[rows])))
     return FamilyFit(fam.type, d, best, {s: [float(v) for v in c] for s, c in colours.items()}, errors, count[0],
                      figure, key, band, hard)
+
+
+def measure(d: dict, key: str, probe, target, metric: str = "perceptual") -> FamilyFit:
+    """The :class:`FamilyFit` of a description ``d`` given rather than fitted (an exactly Lambertian
+    source's ``diffuse``): every metric's figure on ``probe`` against ``target = (g, A)``, as step 5."""
+    g, A = target
+    eps = M.floor(g)
+    fc, alb = probe.measure(_load(d))
+    errors = M.errors(np.broadcast_to(fc, g.shape), g, np.broadcast_to(alb, A.shape), A, eps)
+    rows = [int(np.argmin(np.abs(probe.thetas - math.radians(t)))) for t in REPORT_THETAS]
+    band = float(np.max(np.abs(np.broadcast_to(alb, A.shape)[rows] - A[rows])))
+    figure = errors[metric] if metric != "perceptual" else errors["fcos_max"] + ALBEDO_WEIGHT * errors["albedo_max"]
+    return FamilyFit(d["type"], d, {}, {}, errors, 0, figure, key, band)
+
+
+def gltf_fixed_metallic(value: float) -> Family:
+    """``gltf-pbr`` with its ``metallic`` fixed at ``value`` (roughness and base colour fitted)."""
+    f = FAMILIES["gltf-pbr"]
+    return Family(f.type, (("metallic", float(value)),), tuple(a for a in f.axes if a.name != "metallic"),
+                  f.slots, f.offset)
 
 
 def _product(lists):

@@ -27,7 +27,9 @@ gives the reasons):
   channel conserves energy everywhere; it is nearly flat in incidence, about
   ``Ks`` for ``Ns >= 20`` and less for broad highlights (``0.80 Ks`` at normal
   incidence for ``Ns = 5``, ``0.375 Ks`` for ``Ns = 0``: masking, and facets that
-  reflect below the horizon).  The reciprocal Blinn lobe ``Ks c(Ns) (N.H)^Ns``
+  reflect below the horizon; the usual normalised Blinn-Phong, the same without ``G``, gives
+  ``0.50 Ks`` there, and creates energy at grazing incidence: 1.93 ``Ks`` at 75 degrees, 5.74 at 85
+  for ``Ns = 0`` -- the reason ``G`` is kept, besides Blinn having it; docs/convert.md).  The reciprocal Blinn lobe ``Ks c(Ns) (N.H)^Ns``
   (no division by the cosines) that an earlier version read falls with
   incidence as ``cos^2(theta)`` for sharp highlights (0.60, 0.32, 0.08 at 0, 45,
   75 degrees for ``Ks = 0.6``, ``Ns = 30``): it drops both ``1/cos`` that the
@@ -38,16 +40,29 @@ gives the reasons):
   lights; adding a mirror term of weight ``Ks`` besides counts ``Ks`` twice),
   and no Fresnel factor (the specification gives Fresnel to ``illum 5`` and
   ``7`` only).
-* ``Ka`` (ambient) is not a property of a reflector: ignored with a note;
-  ``d``/``Tr`` (dissolve), ``Ni`` (index, used by ``illum 4-7``), ``Ke``:
-  noted and ignored.  Every ``map_*`` (and ``bump``, ``disp``, ``decal``,
-  ``refl``) is carried by reference: its file name (and options) in
-  :attr:`MtlMaterial.textures`, the file name alone (what follows the options,
-  spaces kept) in :attr:`MtlMaterial.texture_files`.
+* ``illum 5`` (reflection with Fresnel, ray trace on): the same lobe with Schlick's Fresnel of
+  ``R0 = Ks``; ``illum 8`` (reflection on, ray trace off): the same as 3.
+* **Glass** (``illum 4`` and ``9``, "glass on": a thin pane that reflects and transmits without
+  refracting; ``illum 6`` and ``7``, "refraction on"): not a reflector, so not fitted:
+  :class:`Reading` gives ``surface["glass"]`` (``"thindielectric"`` or ``"dielectric"``), the index
+  ``Ni`` (1.5 where it is missing or below 1, warned) and the filter ``Tf`` (the transmittance);
+  the conversion writes Mitsuba's ``thindielectric``/``dielectric`` and glTF's
+  ``KHR_materials_transmission`` with ``KHR_materials_ior``.  ``illum 10`` (a shadow catcher) has
+  no reflection to convert: refused (:attr:`Reading.refused`), the rest of the file converted.
+* **Dissolve** ``d`` (or ``Tr = 1 - d``): below 1 on a reflector, ``surface["opacity"]`` (Mitsuba's
+  ``mask``, glTF's ``alphaMode BLEND``); ``d 0`` (``Tr 1``), fully transparent, is what several
+  exporters write for *opaque* (``Tr`` taken for ``d``): read as opaque, with a warning.  ``map_d``:
+  ``surface["opacity_map"]``.  ``Ke`` (emission, not 0): ``surface["emission"]`` (glTF's
+  ``emissiveFactor``; Mitsuba has no emitter in a BSDF: a warning).
+* ``Ka`` (ambient) is not a property of a reflector: ignored with a note.  Every ``map_*`` (and
+  ``bump``, ``norm``, ``disp``, ``decal``, ``refl``) is carried by reference: its file name (and
+  options) in :attr:`MtlMaterial.textures`, the file name alone (what follows the options, spaces
+  kept) in :attr:`MtlMaterial.texture_files`.
 
-Defaults where a statement is missing: ``Kd = Ks = 0``, ``Ns = 0``, ``illum 2``
-(each noted).  A bad value raises ValueError naming the file, the line, the
-material and the statement, with the allowed range.
+Defaults where a statement is missing: ``Kd = Ks = 0``, ``Ns = 0``, ``illum 2`` (each noted);
+``Kd`` missing beside a ``map_Kd`` is 1 (the map is the colour: Blender 4 writes no ``Kd`` then).
+A bad value raises ValueError naming the file, the line, the material and the statement, with the
+allowed range.
 """
 
 from __future__ import annotations
@@ -59,20 +74,30 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ILLUM", "MtlMaterial", "read_mtl", "as_model", "highlight_spec", "NS_MAX"]
+__all__ = ["ILLUM", "MtlMaterial", "NS_MAX", "Reading", "as_model", "highlight_spec", "read_mtl", "reading"]
 
-#: The illumination models read, and what each means in the specification.
+#: The illumination models of the specification, and what each means there.
 ILLUM = {0: "colour on, ambient off", 1: "colour on, ambient on (diffuse)",
          2: "highlight on (diffuse + Blinn-Phong highlight)",
-         3: "reflection on, ray trace on (illum 2 + mirror reflection)"}
+         3: "reflection on, ray trace on (illum 2 + mirror reflection)",
+         4: "transparency: glass on, reflection: ray trace on",
+         5: "reflection: Fresnel on and ray trace on",
+         6: "transparency: refraction on, reflection: Fresnel off and ray trace on",
+         7: "transparency: refraction on, reflection: Fresnel on and ray trace on",
+         8: "reflection on and ray trace off",
+         9: "transparency: glass on, reflection: ray trace off",
+         10: "casts shadows onto invisible surfaces"}
+#: Glass: the Mitsuba BSDF of each transparent illumination model (a pane without refraction:
+#: ``thindielectric``; refraction on: ``dielectric``).
+GLASS = {4: "thindielectric", 9: "thindielectric", 6: "dielectric", 7: "dielectric"}
+#: The index of refraction of glass where ``Ni`` is missing or below 1 (crown glass).
+GLASS_IOR = 1.5
 #: Largest ``Ns`` read (the range of ``reciprocal-blinn``'s ``n``; the specification's is 0-1000).
 NS_MAX = 1e6
 #: Statements noted and ignored.
 IGNORED = {"Ka": "ambient colour: not a property of a reflector (ignored)",
-           "d": "dissolve (transparency): not converted", "Tr": "transparency: not converted",
-           "Ni": "optical density: used by illum 4-7 only (ignored)", "Ke": "emission: not a reflection (ignored)",
-           "Tf": "transmission filter: not converted", "sharpness": "reflection-map sharpness (ignored)"}
-TEXTURES = ("bump", "disp", "decal", "refl")
+           "sharpness": "reflection-map sharpness (ignored)"}
+TEXTURES = ("bump", "norm", "disp", "decal", "refl")
 
 
 @dataclass
@@ -89,6 +114,18 @@ class MtlMaterial:
     textures: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     given: set = field(default_factory=set)
+    #: Optical density (index of refraction), None where not given.
+    Ni: float | None = None
+    #: Dissolve (opacity, 1 opaque): ``d``, else ``1 - Tr``.
+    d: float = 1.0
+    #: Emission colour.
+    Ke: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    #: Transmission filter (the colour glass lets through), None where not given.
+    Tf: np.ndarray | None = None
+    #: What the reading drops or changes that a user must know (the report's warnings).
+    warnings: list = field(default_factory=list)
+    #: The dissolve statements as given (``d``, ``Tr``: statement -> value).
+    dissolve: dict = field(default_factory=dict)
 
     @property
     def texture_files(self) -> dict:
@@ -138,6 +175,16 @@ def _numbers(where, key, words, lo, hi):
     return np.array(vals * 3 if len(vals) == 1 else vals, float)
 
 
+def _number(where, key, words, lo, hi) -> float:
+    try:
+        v = float(words[0]) if len(words) == 1 else math.nan
+    except ValueError:
+        v = math.nan
+    if not (lo <= v <= hi):
+        raise ValueError(f"{where}: {key} must be one number in [{lo:g}, {hi:g}], got {' '.join(words)!r}")
+    return v
+
+
 def _illum(where, words):
     try:
         n = int(words[0]) if len(words) == 1 else None
@@ -146,8 +193,7 @@ def _illum(where, words):
     if n is None:
         raise ValueError(f"{where}: illum must be one integer (0-10), got {' '.join(words)!r}")
     if n not in ILLUM:
-        raise ValueError(f"{where}: illum {n} is not read; the illumination models read are "
-                         + "; ".join(f"{k} ({v})" for k, v in ILLUM.items()))
+        raise ValueError(f"{where}: illum must be one of the specification's illumination models 0-10, got {n}")
     return n
 
 
@@ -185,11 +231,22 @@ def read_mtl(path) -> list[MtlMaterial]:
                 raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b in [0, 1]")
             setattr(cur, key, _numbers(where, key, words, 0.0, 1.0))
         elif key == "Ns":
-            cur.Ns = _exponent(where, words)
+            cur.Ns = _number(where, "Ns", words, 0.0, NS_MAX)
             if cur.Ns > 1000:
                 cur.notes.append(f"Ns = {cur.Ns:g} is above the MTL specification's range 0-1000 (read as given)")
         elif key == "illum":
             cur.illum = _illum(where, words)
+        elif key in ("d", "Tr"):
+            if words and words[0] == "-halo":
+                cur.notes.append(f"{key} -halo: the dissolve's dependence on the view is not read (a constant)")
+                words = words[1:]
+            cur.dissolve[key] = _number(where, key, words, 0.0, 1.0)
+        elif key == "Ni":
+            cur.Ni = _number(where, key, words, 0.0, 10.0)
+        elif key in ("Ke", "Tf"):
+            if words and words[0] in ("spectral", "xyz"):
+                raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b")
+            setattr(cur, key, _numbers(where, key, words, 0.0, 1e6 if key == "Ke" else 1.0))
         elif key.startswith("map_") or key in TEXTURES:
             if not texture_file(words):
                 raise ValueError(f"{where}: {key} needs a file name (after its options), got {' '.join(words)!r}")
@@ -205,10 +262,27 @@ def read_mtl(path) -> list[MtlMaterial]:
         for m in out:
             m.notes.append(f"the file is not UTF-8: read as {encoding}")
     for m in out:
-        for key, default in (("Kd", "0"), ("Ks", "0"), ("Ns", "0"), ("illum", "2")):
-            if key not in m.given:
-                m.notes.append(f"{key} not given: {default}")
+        _defaults(m)
     return out
+
+
+def _defaults(m: MtlMaterial) -> None:
+    """The defaults of missing statements (noted) and the dissolve of ``d`` / ``Tr``."""
+    if "Kd" not in m.given and "map_Kd" in m.textures:
+        m.Kd = np.ones(3)
+        m.notes.append("Kd not given beside map_Kd: Kd 1 (MTL multiplies map_Kd by Kd; the map is the colour)")
+    for key, default in (("Kd", "0"), ("Ks", "0"), ("Ns", "0"), ("illum", "2")):
+        if key not in m.given and not (key == "Kd" and "map_Kd" in m.textures):
+            m.notes.append(f"{key} not given: {default}")
+    d, tr = m.dissolve.get("d"), m.dissolve.get("Tr")
+    if d is not None and tr is not None and abs(d - (1.0 - tr)) > 1e-9:
+        m.notes.append(f"d {d:g} and Tr {tr:g} disagree (Tr = 1 - d): d read")
+    m.d = d if d is not None else (1.0 - tr if tr is not None else 1.0)
+    if m.d == 0.0 and m.illum not in GLASS:          # glass: d is not read (its transparency is the glass)
+        said = "d 0" if d is not None else "Tr 1"
+        m.warnings.append(f"{said} (fully transparent) read as opaque: exporters write it for opaque materials "
+                          f"(Tr taken for d); the material would be invisible")
+        m.d = 1.0
 
 
 def _text(path) -> tuple[str, str]:
@@ -237,37 +311,72 @@ def _text(path) -> tuple[str, str]:
     raise AssertionError("Latin-1 decodes every byte")   # pragma: no cover
 
 
-def _exponent(where, words) -> float:
-    try:
-        v = float(words[0]) if len(words) == 1 else math.nan
-    except ValueError:
-        v = math.nan
-    if not (0.0 <= v <= NS_MAX):
-        raise ValueError(f"{where}: Ns must be one number in [0, {NS_MAX:g}], got {' '.join(words)!r}")
-    return v
-
-
 def _spec_colour(c) -> str:
     return ",".join(repr(float(x)) for x in c)
 
 
-def highlight_spec(Ks, Ns) -> str:
+def highlight_spec(Ks, Ns, fresnel: str = "none") -> str:
     """The spec of MTL's highlight ``Ks``, ``Ns`` as read (module docstring): the
     microfacet model of the normalised Blinn distribution of exponent ``Ns``
-    (slope ``m = sqrt(2 / (Ns + 2))``), V-groove masking, no Fresnel."""
+    (slope ``m = sqrt(2 / (Ns + 2))``), V-groove masking, no Fresnel (``fresnel="schlick"``:
+    Schlick's of ``R0 = Ks``, ``illum 5``)."""
     m = math.sqrt(2.0 / (float(Ns) + 2.0))
-    return f"cook-torrance:distribution=blinn:m={m!r}:rs={_spec_colour(Ks)}:fresnel=none:geometry=vgroove"
+    return f"cook-torrance:distribution=blinn:m={m!r}:rs={_spec_colour(Ks)}:fresnel={fresnel}:geometry=vgroove"
 
 
-def as_model(m: MtlMaterial):
-    """``(model, spec, notes)``: the plausible reading of ``m`` (module docstring):
-    a :class:`~plausible.models.sum.Sum` labelled with the material's name, its
-    spec text (``"lambertian:rd=... + cook-torrance:distribution=blinn:m=...:rs=...:..."``),
-    and the notes of the reading."""
+#: Texture statements a conversion drops and warns about (what a user sees changes: the relief, the
+#: cut-outs, the decals); the others it drops are noted.
+WARNED_TEXTURES = ("bump", "map_bump", "norm", "map_norm", "disp", "map_disp", "decal", "map_d")
+
+
+@dataclass
+class Reading:
+    """The reading of one material (module docstring): the plausible ``model`` of its reflection
+    (a :class:`~plausible.models.sum.Sum`), its ``spec``, ``notes`` and ``warnings``, what a
+    reflection model does not hold (``surface``: ``glass`` (the Mitsuba type), ``ior``,
+    ``transmittance``, ``opacity``, ``opacity_map``, ``emission``) and, where the material
+    cannot be converted, why (``refused``)."""
+
+    model: object
+    spec: str
+    notes: list
+    warnings: list
+    surface: dict
+    refused: str | None = None
+
+
+def _surface(m: MtlMaterial, notes: list, warnings: list) -> dict:
+    """What the material has beside its reflection (:class:`Reading`)."""
+    out = {}
+    if m.illum in GLASS:
+        out["glass"] = GLASS[m.illum]
+        ior = m.Ni if m.Ni is not None and m.Ni >= 1.0 else None
+        if ior is None:
+            warnings.append(f"illum {m.illum} (glass): Ni {'not given' if m.Ni is None else f'{m.Ni:g} (below 1)'}: "
+                            f"the index of glass, {GLASS_IOR:g}, read")
+        out["ior"] = ior or GLASS_IOR
+        out["transmittance"] = [float(x) for x in (m.Tf if m.Tf is not None else np.ones(3))]
+        notes.append(f"illum {m.illum} ({ILLUM[m.illum]}): glass, a smooth {out['glass']} of index {out['ior']:g} "
+                     f"transmitting Tf {_spec_colour(out['transmittance'])}; Kd, Ks, Ns and d are not read for it"
+                     + ("; MTL's 'Fresnel off' is not followed (a dielectric has Fresnel)" if m.illum == 6 else ""))
+        return out
+    if m.d < 1.0:
+        out["opacity"] = m.d
+    if "map_d" in m.texture_files:
+        out["opacity_map"] = m.texture_files["map_d"]
+    if np.any(m.Ke > 0):
+        out["emission"] = [float(x) for x in m.Ke]
+    if m.Tf is not None and np.any(m.Tf < 1):
+        notes.append("Tf (transmission filter) of an opaque material (illum 0-3, 5, 8): not read")
+    return out
+
+
+def reading(m: MtlMaterial) -> Reading:
+    """The :class:`Reading` of ``m`` (module docstring)."""
     from .. import registry
     from ..models.sum import Sum
 
-    notes = list(m.notes)
+    notes, warnings = list(m.notes), list(m.warnings)
     parts = []
     if m.illum in (0, 1):
         if np.any(m.Ks > 0):
@@ -279,14 +388,28 @@ def as_model(m: MtlMaterial):
         if np.any(m.Kd > 0) or not np.any(m.Ks > 0):
             parts.append(f"lambertian:rd={_spec_colour(m.Kd)}")
         if np.any(m.Ks > 0):
-            parts.append(highlight_spec(m.Ks, m.Ns))
-        if m.illum == 3:
-            notes.append("illum 3: the ray-traced reflection is the Blinn-Phong lobe itself (not added twice); "
-                         "no Fresnel (MTL gives Fresnel to illum 5 and 7)")
+            parts.append(highlight_spec(m.Ks, m.Ns, "schlick" if m.illum == 5 else "none"))
+        if m.illum in (3, 8):
+            notes.append(f"illum {m.illum}: the ray-traced reflection is the Blinn-Phong lobe itself (not added "
+                         "twice); no Fresnel (MTL gives Fresnel to illum 5 and 7)")
+        if m.illum == 5:
+            notes.append("illum 5: the highlight with Schlick's Fresnel of R0 = Ks")
     total = m.Kd + (m.Ks if m.illum >= 2 else 0.0)
-    if np.any(total > 1.0 + 1e-12):
+    if np.any(total > 1.0 + 1e-12) and m.illum not in GLASS:
         notes.append(f"Kd + Ks = {_spec_colour(np.round(total, 4))} exceeds 1: energy conservation is not "
                      "guaranteed (it holds only where the highlight reflects less than Ks; the conversion "
                      "measures the albedo)")
+    surface = _surface(m, notes, warnings)
+    refused = None
+    if m.illum == 10:
+        refused = (f"illum 10 ({ILLUM[10]}: a shadow catcher, invisible itself) has no reflection to convert: "
+                   f"material {m.name!r} skipped")
     models = [registry.make_from_spec(s) for s in parts]
-    return Sum(models, name=m.name), " + ".join(parts), notes
+    return Reading(Sum(models, name=m.name), " + ".join(parts), notes, warnings, surface, refused)
+
+
+def as_model(m: MtlMaterial):
+    """``(model, spec, notes)`` of :func:`reading` (the reflection of ``m`` as a labelled
+    :class:`~plausible.models.sum.Sum`, its spec, the notes of the reading)."""
+    r = reading(m)
+    return r.model, r.spec, r.notes

@@ -7,8 +7,12 @@ References
   ``data:application/octet-stream;base64`` URIs).
 * Khronos, *KHR_materials_specular* (``specularFactor``, ``specularColorFactor``),
   *KHR_materials_anisotropy* (``anisotropyStrength``, ``anisotropyRotation``; a mesh using
-  it MUST have ``NORMAL`` and ``TANGENT`` attributes) and *KHR_materials_ior* (``ior``,
+  it MUST have ``NORMAL`` and ``TANGENT`` attributes), *KHR_materials_ior* (``ior``,
   default 1.5; ``f0 = ((ior - 1)/(ior + 1))^2``; 0 means an infinite ior).
+* Khronos, *KHR_materials_transmission* (``transmissionFactor``), *KHR_materials_ior* (``ior``),
+  *KHR_materials_emissive_strength* (``emissiveStrength``); the core material's ``alphaMode``
+  and ``emissiveFactor``: what a material has beside its BRDF (``surface`` of
+  :func:`gltf_material`: glass, opacity, emission of an MTL file).
 
 ``KHR_materials_ior``: a material given with an ``"ior"`` entry (besides the model's
 parameters) is written with the extension and its ``specularColorFactor`` as given; the model
@@ -49,8 +53,8 @@ import numpy as np
 
 from .. import registry
 
-__all__ = ["TEXTURE_SLOTS", "gltf_document", "gltf_material", "image_uri", "material_model", "read_gltf_materials",
-           "sphere", "write_gltf"]
+__all__ = ["SURFACE", "TEXTURE_SLOTS", "gltf_document", "gltf_material", "image_uri", "material_model",
+           "read_gltf_materials", "sphere", "write_gltf"]
 
 #: glTF's numbers for the types the file uses.
 _FLOAT, _UNSIGNED_SHORT = 5126, 5123
@@ -88,13 +92,51 @@ def _rgb(v) -> list:
     return [float(x) for x in a]
 
 
-def gltf_material(name: str, params) -> dict:
+#: What a material may have beside its BRDF (``surface`` of :func:`gltf_material`) and its range.
+SURFACE = {"alpha": (0.0, 1.0), "emissive": (0.0, float("inf")), "transmission": (0.0, 1.0), "ior": (1.0, 10.0)}
+
+
+def _surface(name, surface) -> dict:
+    """``surface`` checked against :data:`SURFACE` (ValueError naming the material and the key)."""
+    surface = dict(surface or {})
+    for k, v in surface.items():
+        if k not in SURFACE:
+            raise ValueError(f"material {name!r}: surface key {k!r} is not written; keys: {', '.join(SURFACE)}")
+        lo, hi = SURFACE[k]
+        a = np.asarray(v, float)
+        if a.size not in (1, 3) or not np.all((a >= lo) & (a <= hi)):
+            raise ValueError(f"material {name!r}: surface {k!r} must be in [{lo:g}, {hi:g}], got {v!r}")
+    return surface
+
+
+def _with_surface(mat: dict, ext: dict, sf: dict) -> None:
+    """The glTF of ``sf`` (:data:`SURFACE`): ``alpha`` < 1 -> ``alphaMode BLEND`` and the base colour's
+    alpha; ``emissive`` -> ``emissiveFactor`` (above 1: divided by its largest channel, which becomes
+    ``KHR_materials_emissive_strength``); ``transmission``, ``ior`` -> their extensions."""
+    if "alpha" in sf and float(sf["alpha"]) < 1.0:
+        mat["pbrMetallicRoughness"]["baseColorFactor"][3] = float(sf["alpha"])
+        mat["alphaMode"] = "BLEND"
+    if "emissive" in sf:
+        e = _rgb(sf["emissive"])
+        top = max(e)
+        mat["emissiveFactor"] = [x / top for x in e] if top > 1.0 else e
+        if top > 1.0:
+            ext["KHR_materials_emissive_strength"] = {"emissiveStrength": top}
+    if "transmission" in sf:
+        ext["KHR_materials_transmission"] = {"transmissionFactor": float(sf["transmission"])}
+    if "ior" in sf:
+        ext["KHR_materials_ior"] = {"ior": float(sf["ior"])}
+
+
+def gltf_material(name: str, params, surface: dict | None = None) -> dict:
     """The glTF material object of one ``gltf-pbr`` material (``params``: a dict of its
-    parameters or the model); ValueError naming the material and the parameter for bad values."""
+    parameters or the model) and what it has beside its BRDF (``surface``: :data:`SURFACE`);
+    ValueError naming the material and the parameter for bad values."""
     p = _model(name, params).params
     ior = params.get("ior", 1.5) if isinstance(params, dict) else 1.5
     if ior != 1.5:      # the factor as the user gave it, relative to this ior
         p = dict(p, specular_color=params.get("specular_color", 1.0))
+    sf = _surface(name, surface)
     mat = {"name": str(name),
            "pbrMetallicRoughness": {"baseColorFactor": _rgb(p["base_color"]) + [1.0],
                                     "metallicFactor": float(p["metallic"]),
@@ -106,8 +148,9 @@ def gltf_material(name: str, params) -> dict:
     if p["anisotropy_strength"] != 0.0:
         ext["KHR_materials_anisotropy"] = {"anisotropyStrength": float(p["anisotropy_strength"]),
                                            "anisotropyRotation": float(p["anisotropy_rotation"])}
-    if ior != 1.5:
+    if ior != 1.5 and "ior" not in sf:
         ext["KHR_materials_ior"] = {"ior": float(ior)}
+    _with_surface(mat, ext, sf)
     if ext:
         mat["extensions"] = ext
     return mat
@@ -229,16 +272,19 @@ def _textures(mats, textures):
     return images, textured
 
 
-def gltf_document(materials: dict, *, rings: int = 32, segments: int = 64, textures: dict | None = None) -> dict:
+def gltf_document(materials: dict, *, rings: int = 32, segments: int = 64, textures: dict | None = None,
+                  surfaces: dict | None = None) -> dict:
     """The glTF 2.0 JSON (a dict) of ``materials`` (name -> ``gltf-pbr`` parameters or
     model), one sphere each (see the module docstring).  ``textures``: ``{material:
     {slot: file}}`` (slots :data:`TEXTURE_SLOTS`), each file referenced by a relative URI
     (:func:`image_uri`, not embedded), its material's sphere given ``TEXCOORD_0``
-    (``u`` the azimuth, ``v`` the polar angle, both 0-1)."""
+    (``u`` the azimuth, ``v`` the polar angle, both 0-1).  ``surfaces``: ``{material: surface}``
+    (:func:`gltf_material`'s, :data:`SURFACE`)."""
     if not isinstance(materials, dict) or not materials:
         raise ValueError(f"materials must be a non-empty dict of name -> gltf-pbr parameters, "
                          f"got {type(materials).__name__} {materials!r:.60}")
-    mats = [gltf_material(name, params) for name, params in materials.items()]
+    surfaces = surfaces or {}
+    mats = [gltf_material(name, params, surfaces.get(name)) for name, params in materials.items()]
     images, textured = _textures(mats, textures)
     pos, nrm, tan, idx = sphere(rings, segments)
     arrays = [(pos, "VEC3", _ARRAY_BUFFER), (nrm, "VEC3", _ARRAY_BUFFER),

@@ -65,7 +65,7 @@ def register(variant: str | None = None) -> list:
     call ``register()`` again, else ``mi.load_dict`` says only ``Plugin
     "lambertian" not found!`` (:func:`load_dict` adds this hint).  Returns the
     plugin names (those of :func:`plugin_names`, then ``merl``,
-    ``plausible_material`` and ``plausible_compensated``).
+    ``plausible_material``, ``plausible_sum`` and ``plausible_compensated``).
     """
     import mitsuba as mi
 
@@ -83,6 +83,7 @@ def register(variant: str | None = None) -> list:
     from . import compensated, material
 
     made[material.PLUGIN] = material.make_material_plugin_class        # plausible_material
+    made[material.SUM_PLUGIN] = material.make_sum_plugin_class         # plausible_sum
     made[compensated.PLUGIN] = compensated.make_compensated_class      # plausible_compensated
     for plugin, make in made.items():
         if plugin not in classes:

@@ -1,4 +1,6 @@
-"""The Mitsuba 3 plugin ``plausible_material``: a published fit of a MERL material.
+"""The Mitsuba 3 plugins ``plausible_material`` (a published fit of a MERL material) and
+``plausible_sum`` (a sum of models given by its spec, ``{"type": "plausible_sum", "spec": "a + b"}``,
+what :func:`plausible.mitsuba.scene_dict.to_dict` writes for a :class:`~plausible.models.sum.Sum`).
 
     {"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"}
 
@@ -17,10 +19,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..catalogue.entry import Material
+from ..models.sum import Sum
+from ..params import ModelInfo, ModelParam
 
 PLUGIN = Material.OWNER
 #: The registry entry ``material`` (:mod:`plausible.catalogue.entry`).
 INFO = Material.info
+#: The plugin of a sum of models, and its one parameter: the sum's spec (:meth:`Sum.spec`), built
+#: by :func:`plausible.make` (no registry entry: a sum is a composition, not a family).
+SUM_PLUGIN = "plausible_sum"
+SUM_INFO = ModelInfo("sum", Sum, (ModelParam("spec", "lambertian:rd=0.5 + reciprocal-blinn:ks=0.3:n=50.0",
+                                             doc="the sum's spec, 'a + SCALE * b'"),),
+                     "A sum of models, f = sum_k s_k f_k (plausible.models.sum.Sum), given by its spec.")
 
 
 def _as_data(mi, model):
@@ -55,6 +65,32 @@ def _trace(mi, model):
     model._sample(ops, w, (mi.Float(0.5), mi.Float(0.5), mi.Float(0.5)), model.q)
 
 
+def make_sum_plugin_class():
+    """The plugin ``plausible_sum``: the generic plugin around the model its ``spec`` builds
+    (:data:`SUM_INFO`), with the parts' colours as kernel data (as ``plausible_material``)."""
+    import mitsuba as mi
+
+    from .plugin import make_plugin_class
+
+    base = make_plugin_class(SUM_PLUGIN, SUM_INFO.name, info=SUM_INFO)
+
+    class PlausibleSum(base):
+        def __init__(self, props):
+            super().__init__(props)
+            self.state.model = _as_data(mi, self.state.model)
+
+        def _model_factory(self, props):
+            from ..registry import make_from_spec
+
+            return lambda spec: spec if hasattr(spec, "eval") else make_from_spec(spec)
+
+        def to_string(self):
+            return f"{SUM_PLUGIN}[{self.model.spec()}]"
+
+    PlausibleSum.__name__ = PlausibleSum.__qualname__ = "Plausible_" + SUM_PLUGIN
+    return PlausibleSum
+
+
 def make_material_plugin_class():
     """The plugin class: the generic plugin around :class:`Material`, with
     the parts' colours converted to ``mi.Color3f`` for Dr.Jit."""
@@ -80,4 +116,5 @@ def make_material_plugin_class():
     return PlausibleMaterial
 
 
-__all__ = ["INFO", "Material", "PLUGIN", "make_material_plugin_class"]
+__all__ = ["INFO", "Material", "PLUGIN", "SUM_INFO", "SUM_PLUGIN", "make_material_plugin_class",
+           "make_sum_plugin_class"]

@@ -30,6 +30,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..spectra import srgb_to_linear
+
 #: Mitsuba-style parameter names accepted by every plugin whose model has one of
 #: the candidate parameters (first candidate present wins).
 #: ``specular_reflectance`` goes only to a scale of the specular lobe (``ks``),
@@ -345,14 +347,6 @@ def texture_texels(mi, tex):
     width = max(r.shape[1] for r in rows)
     return np.concatenate([np.broadcast_to(r, (len(r), width)) if r.shape[1] == 1 else r
                            for r in rows])
-
-
-def srgb_to_linear(c):
-    """The sRGB transfer function undone (IEC 61966-2-1), as Mitsuba's
-    ``mi.math.srgb_to_linear``: ``c / 12.92`` up to 0.04045, else
-    ``((c + 0.055) / 1.055)^2.4``."""
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.04045, c / 12.92, np.power((np.maximum(c, 0.04045) + 0.055) / 1.055, 2.4))
 
 
 def bitmap_values(data, raw: bool) -> np.ndarray:

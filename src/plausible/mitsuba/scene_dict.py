@@ -25,7 +25,18 @@ def plugin_name(model: BxDF) -> str:
 
 
 def to_dict(model: BxDF) -> dict:
-    """The ``mi.load_dict`` description of ``model`` as a plausible plugin."""
+    """The ``mi.load_dict`` description of ``model`` as a plausible plugin: a published fit
+    (``material:NAME@FIT``) as ``plausible_material``, any other sum of models
+    (:class:`~plausible.models.sum.Sum`) as ``plausible_sum`` with its spec."""
+    spec = model.spec() if hasattr(model, "parts") and hasattr(model, "scales") else None
+    from ..catalogue.entry import PREFIX
+    from ..catalogue.fit_sets import parse_spec
+
+    if spec is not None and spec.startswith(PREFIX):
+        name, fit = parse_spec(spec)
+        return {"type": "plausible_material", "name": name, "fit": fit}
+    if spec is not None:
+        return {"type": "plausible_sum", "spec": spec}
     d = {"type": plugin_name(model)}
     for p in type(model).PARAMS:
         v = model.params[p.name]

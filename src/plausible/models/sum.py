@@ -37,6 +37,8 @@ import numpy as np
 from .. import warps
 from ..bxdf import BxDF, Lobe, mixture_probabilities
 from ..kernel_params import is_data
+from ..params import spec_value
+from ..registry import provide_sum
 from ..text import fmt
 
 #: Cosines of the incidences at which a part's albedo is estimated.
@@ -92,8 +94,10 @@ class Sum(BxDF):
 
     PARAMS = ()
 
-    def __init__(self, parts, name: str | None = None):
+    def __init__(self, parts, name: str | None = None, spec: str | None = None):
         super().__init__()
+        #: The spec this sum was read from where it is shorter than its parts' (``material:NAME@FIT``).
+        self.source_spec = spec
         if isinstance(parts, (str, bytes, BxDF)) or not hasattr(parts, "__iter__"):
             raise ValueError(f"Sum: parameter 'parts' must be a non-empty list of models or "
                              f"(model, scale) pairs, got {parts!r}")
@@ -228,6 +232,33 @@ class Sum(BxDF):
     def level_kink(self):
         return any(m.level_kink() for m in self.parts)
 
+    def terms(self, scale=None) -> list:
+        """``[(model, scale or None), ...]``: the parts, a nested sum's own terms in its place, each
+        scale times ``scale`` (a sum of sums is the sum of all their terms)."""
+        out = []
+        for m, s in zip(self.parts, self.scales):
+            k = s if scale is None else (scale if s is None else np.asarray(s) * scale)
+            if type(m) is Sum and not m.source_spec:        # not a subclass with its own spec
+                out.extend(m.terms(k))
+            else:
+                out.append((m, k))
+        return out
+
+    def spec(self) -> str:
+        """The sum as a spec that :func:`plausible.make` reads back into an equal model:
+        ``"a + SCALE * b"`` (each part's own spec, :meth:`plausible.bxdf.BxDF.spec`, a scale
+        written exactly, a number or ``r,g,b``, before ``" * "``; a nested sum's terms in its
+        place), or the spec it was read from (``material:NAME@FIT``).  The label is not part
+        of it.
+
+        >>> import plausible
+        >>> plausible.make("lambertian:rd=0.5 + 0.25 * lambertian:rd=1.0").spec()
+        'lambertian:rd=0.5 + 0.25 * lambertian:rd=1.0'
+        """
+        if self.source_spec:
+            return self.source_spec
+        return " + ".join(("" if s is None else spec_value(s) + " * ") + m.spec() for m, s in self.terms())
+
     def __repr__(self) -> str:
         parts = ", ".join(repr(m) if s is None else f"({m!r}, {fmt(s, '.6g')})"
                           for m, s in zip(self.parts, self.scales))
@@ -244,3 +275,6 @@ def _scaled(fn, s):
 
 def _claims_reciprocal(model) -> bool:
     return bool(model.reciprocal)       # BxDF.reciprocal: the registry's claim, or the model's own
+
+
+provide_sum(Sum)
