@@ -351,11 +351,21 @@ def _band(a, A, rows, hard=False):
     return BAND_WEIGHT * max(0.0, d - BAND) + (HARD_WEIGHT * max(0.0, d - BAND_HARD) if hard else 0.0)
 
 
-def _figure(metric, F, Alb, x, g, A, eps, rows=None, hard=False):
+def _highlight(c, g, eps, hl):
+    """The highlight's cost (:func:`plausible.fitting.metrics.highlight_excess`, as in
+    :func:`plausible.fit`) of ``c`` against ``g`` ((K, C): channel means) at the rows ``hl``;
+    0 without rows."""
+    if hl is None:
+        return 0.0
+    return M.HIGHLIGHT_WEIGHT * float(np.sum(M.highlight_excess(c.mean(axis=-1), g.mean(axis=-1), hl, eps) ** 2))
+
+
+def _figure(metric, F, Alb, x, g, A, eps, rows=None, hard=False, hl=None):
     a = _predict(Alb, x)
-    e = M.errors(_predict(F, x), g, a, A, eps)
+    c = _predict(F, x)
+    e = M.errors(c, g, a, A, eps)
     base = e["fcos_max"] + ALBEDO_WEIGHT * e["albedo_max"] if metric == "perceptual" else e[metric]
-    return base + _band(a, A, rows, hard), e
+    return base + _band(a, A, rows, hard) + _highlight(c, g, eps, hl), e
 
 
 #: Weight of the albedo rows of the least squares, beyond equal weight of the two sets.
@@ -415,7 +425,7 @@ def _within_band(R, r, Alb, Ac, band, x0):
     return x if np.all(np.abs(P @ x - q) <= BAND_HARD) else xf
 
 
-def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False):
+def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
     """Step 4 on each channel; the better of ``x`` and the polished point per channel."""
     from scipy.optimize import minimize
 
@@ -426,12 +436,12 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False):
         gc, Ac = g[:, c:c + 1], A[:, c:c + 1]
 
         def true(z):
-            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows, hard)[0]
+            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows, hard, hl)[0]
 
         def smooth(z, beta):
             z = np.clip(z, 0, 1)[:, None]
             c, a = _predict(F, z), _predict(Alb, z)
-            band = _band(a, Ac, rows, hard)
+            band = _band(a, Ac, rows, hard) + _highlight(c, gc, eps, hl)
             if metric != "perceptual":
                 return M.objective(metric, c, gc, a, Ac, eps, beta=beta) + band
             return (M.objective(metric, c, gc, eps=eps, beta=beta)
@@ -506,13 +516,14 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     g, A = target if target is not None else source_target(source, probe)
     eps = M.floor(g)
     rows = [int(np.argmin(np.abs(probe.thetas - math.radians(t)))) for t in REPORT_THETAS]
+    hl = M.highlight_rows(probe.wi, g)          # the highlight held as in plausible.fit
     count = [0]
 
     def score(point):
         count[0] += 1
         F, Alb = basis(probe, fam, point)
         x = _lsq(F, Alb, g, A, eps, metric, rows if hard else None)
-        return _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0], x
+        return _figure(metric, F, Alb, x, g, A, eps, rows, hard, hl)[0], x
 
     # 2. scan
     grid = [dict(zip([a.name for a in fam.axes], vals))
@@ -533,8 +544,8 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
             best[ax.name] = ax.inv(float(r.x))
     F, Alb = basis(probe, fam, best)
     # 4. polish the colours
-    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard)
-    figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0]
+    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard, hl)
+    figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard, hl)[0]
     colours = {s: x[j] for j, s in enumerate(fam.slots)}
     d = fam.bsdf_dict(best, colours)
     # 5. measure the loaded result

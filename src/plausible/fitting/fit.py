@@ -204,8 +204,19 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     relative errors of ``f cos`` and of the albedo (Neumann, Neumann &
     Szirmay-Kalos 1999, section 1.1).  Returns a :class:`FitResult`.
 
-    The steps are those of the module docstring.
+    The steps are those of the module docstring.  The fit runs with one BLAS thread
+    (``threadpoolctl``): two OpenBLAS threads for a problem of a few variables cost 12
+    times the CPU of one (issue 40).
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg,
+                    target_albedo, maxiter, combine)
+
+
+def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg, target_albedo,
+         maxiter, combine):
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
     M.check_combine(combine)
@@ -244,7 +255,7 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     if flat:
         warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(_flat_text(g) for g in flat)
                       + " (the samples do not decide them; fix one with fixed={...} or add samples that do)",
-                      UnconstrainedWarning, stacklevel=2)
+                      UnconstrainedWarning, stacklevel=3)
     # 6. every metric's figure, albedo by the accurate integrator; parameters at their bounds said aloud
     model = info.cls(**params)
     out = evaluate_fit(model, tgt, problem.eps, combine)
@@ -252,7 +263,7 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     if bounds:
         warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(bounds)
                       + " (the optimum lies on the edge of the range: the model cannot follow the target there, "
-                        "or a wider range would fit better)", BoundWarning, stacklevel=2)
+                        "or a wider range would fit better)", BoundWarning, stacklevel=3)
     return FitResult(model, {k: model.params[k] for k in model.params}, metric, out["errors"], tgt,
                      sum(o.evaluations for o in objectives), any(o.timed_out for o in objectives),
                      time.monotonic() - t0, out["albedo"], flat, bounds, notes)
@@ -297,6 +308,10 @@ def _fit_isotropic_first(problem, free, pairs, base, starts, seed, tick):
     for b, a in seconds.items():
         params[b] = params[a]
     iso_value = min(o.best_value for o in objs) if objs else math.inf
+    names = ", ".join(f"{a} = {b}" for a, b in pairs)
+    if iso_value <= PERFECT:
+        tick()
+        return params, objs, f"isotropic target: {names}, an exact fit (figure {iso_value:.3g})"
     full = [_Var(p) for p in free]
     obj = _Objective(problem, full, params, None)
     aniso = dict(params)
@@ -304,7 +319,6 @@ def _fit_isotropic_first(problem, free, pairs, base, starts, seed, tick):
         aniso.update(_optimise(obj, [[v.fwd(params[v.name]) for v in full]], tick))
     except _Timeout:
         pass
-    names = ", ".join(f"{a} = {b}" for a, b in pairs)
     if obj.best_value < (1.0 - ANISOTROPY_MARGIN) * iso_value:
         return aniso, objs + [obj], (f"anisotropic fit kept: figure {obj.best_value:.4g} against {iso_value:.4g} "
                                      f"with {names} (lower by more than {ANISOTROPY_MARGIN:.0%})")
@@ -681,6 +695,9 @@ def _same_optimum(found, x, value, spans) -> bool:
                for y, w in found)
 
 
+#: A least-squares figure (squared) at or below this is an exact fit (relative RMS 1e-9): no
+#: further start, and no anisotropic attempt after an isotropic one.
+PERFECT = 1e-18
 #: The metrics fitted as least squares of a residual vector (:meth:`_Objective._residuals`).
 LEAST_SQUARES = ("l2-cos", "log")
 #: How the least-squares Jacobian is taken: ``"population"`` (forward differences of
@@ -752,9 +769,9 @@ def _optimise(fun: _Objective, x0s, tick) -> dict:
                 rejected = fun.rejected
                 r = _least_squares(fun, x, bounds)
                 value = 2.0 * float(r.cost)
-                if _same_optimum(found, r.x, value, spans):
+                if _same_optimum(found, r.x, value, spans) or fun.best_value <= PERFECT:
                     tick()
-                    break           # a second start found an optimum found before: more would too
+                    break           # an optimum found before, or an exact fit: more starts would repeat it
                 found.append((r.x, value))
                 if fun.rejected > rejected:
                     # derivative-free polish: the trust region stops where a constraint the model
