@@ -597,7 +597,9 @@ class _Objective:
             out.append(z)
         return out
 
-    def _evaluate(self, xs, beta) -> list:
+    def _candidates(self, xs):
+        """``(models, values)``: the model at each point (None where the model rejects it) and
+        an iterator over the values of those that exist, in order (one launch)."""
         models = []
         for x in xs:
             try:
@@ -605,7 +607,10 @@ class _Objective:
             except ValueError:
                 models.append(None)
                 self.rejected += 1
-        vals = iter(self.problem.values.many([m for m in models if m is not None]))
+        return models, iter(self.problem.values.many([m for m in models if m is not None]))
+
+    def _evaluate(self, xs, beta) -> list:
+        models, vals = self._candidates(xs)
         return [PENALTY if m is None else self._value(next(vals), beta) for m in models]
 
     def _value(self, values, beta):
@@ -643,14 +648,7 @@ class _Objective:
         if pb.deadline is not None and time.monotonic() > pb.deadline:
             self.timed_out = True
             raise _Timeout
-        models = []
-        for x in xs:
-            try:
-                models.append(self.model_at(x))
-            except ValueError:
-                models.append(None)
-                self.rejected += 1
-        vals = iter(pb.values.many([m for m in models if m is not None]))
+        models, vals = self._candidates(xs)
         out = [None if m is None else self._residuals(next(vals)) for m in models]
         size = next((len(r) for r in out if r is not None), len(pb.rows) + 1)
         out = [np.full(size, math.sqrt(PENALTY / size)) if r is None else r for r in out]
