@@ -768,7 +768,8 @@ def _optimise(fun: _Objective, x0s, tick) -> dict:
                 r = _least_squares(fun, x, bounds)
                 value = 2.0 * float(r.cost)
                 if _same_optimum(found, r.x, value, spans) or fun.best_value <= PERFECT:
-                    tick()
+                    for _ in range(len(x0s) - len(found)):
+                        tick()      # this start and the ones skipped: the bar completes
                     break           # an optimum found before, or an exact fit: more starts would repeat it
                 found.append((r.x, value))
                 if fun.rejected > rejected:
