@@ -650,7 +650,7 @@ class _Objective:
             raise _Timeout
         models, vals = self._candidates(xs)
         out = [None if m is None else self._residuals(next(vals)) for m in models]
-        size = next((len(r) for r in out if r is not None), len(pb.rows) + 1)
+        size = np.size(self.g) + len(pb.rows)      # the residuals: one per pair, one per highlight row
         out = [np.full(size, math.sqrt(PENALTY / size)) if r is None else r for r in out]
         self.evaluations += len(xs)
         for x, r in zip(xs, out):
