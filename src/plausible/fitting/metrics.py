@@ -106,7 +106,7 @@ def errors(c, g, a=None, A=None, eps=None, combine: str = "sum", rows=None) -> d
 #: target's.  Beyond it each log unit of excess costs :data:`HIGHLIGHT_WEIGHT` times its square
 #: in what the fit minimises (:func:`highlight_excess`): a constraint the fit meets wherever the
 #: model can, and no cost at all inside the band, so a fit that keeps its highlight is unchanged.
-HIGHLIGHT_BAND, HIGHLIGHT_WEIGHT = 1.5, 10.0
+HIGHLIGHT_BAND, HIGHLIGHT_WEIGHT = 1.75, 100.0
 
 
 #: The highlight is held at incidences up to this angle (degrees).  Beyond, lobes differ by
