@@ -316,7 +316,7 @@ def _fit_isotropic_first(problem, free, pairs, base, starts, seed, tick):
     obj = _Objective(problem, full, params, None)
     aniso = dict(params)
     try:
-        aniso.update(_optimise(obj, [[v.fwd(params[v.name]) for v in full]], tick))
+        aniso.update(optimise(obj, [[v.fwd(params[v.name]) for v in full]], tick))
     except _Timeout:
         pass
     if obj.best_value < (1.0 - ANISOTROPY_MARGIN) * iso_value:
@@ -735,12 +735,21 @@ def _least_squares(fun: _Objective, x0, bounds):
                          max_nfev=fun.problem.maxiter * (len(x0) + 1))
 
 
-def _optimise(fun: _Objective, x0s, tick) -> dict:
-    """Step 3 from each start in ``x0s``: L-BFGS-B (on the smooth bounds at
-    ``beta = 20, 200, 2000`` for ``perceptual``), then a bounded Nelder-Mead
-    polish on the true figure; a start whose first optimum repeats an earlier
-    start's stops there (:data:`MERGE_TOL`); ``tick()`` after each start; stop at
-    the deadline.  Returns the best point's parameter values."""
+def optimise(fun, x0s, tick) -> dict:
+    """Step 3 from each start in ``x0s``, the one optimiser of :func:`fit` and of
+    :func:`plausible.convert` (its Mitsuba families' colours,
+    :class:`plausible.conversion.mitsuba.ColourObjective`): least squares
+    (:func:`_least_squares`, :data:`LEAST_SQUARES` metrics) or, for ``perceptual``,
+    L-BFGS-B on the smooth bounds at ``beta = 20, 200, 2000`` then a bounded Nelder-Mead
+    polish on the true figure; the multi-start ends once a start repeats an earlier
+    start's optimum (:data:`MERGE_TOL`) or fits exactly (:data:`PERFECT`); ``tick()``
+    after each start; stop at the deadline.  Returns the best point's parameter values.
+
+    ``fun``, the objective (an :class:`_Objective`, or an adapter with the same
+    attributes): ``vars`` (each with ``bounds``), ``problem.metric`` and
+    ``problem.maxiter``, ``fun(x)`` the true figure and ``fun(x, beta)`` its smooth
+    bound, ``residuals_many(xs)`` (least squares), the best point kept in ``best_x``,
+    ``best_value``, ``best_params(x0)``, and ``rejected``, ``timed_out``, ``fd``."""
     from scipy.optimize import minimize
 
     bounds = [v.bounds for v in fun.vars]
@@ -798,7 +807,7 @@ def _fit_shared(problem, vars_, base, starts, seed, tick):
     x0s = [x_def] + [[rng.uniform(*v.bounds) for v in vars_] for _ in range(starts - 1)]
     x0s = [_feasible(problem.info, params, vars_, x, rng) for x in x0s]
     obj = _Objective(problem, vars_, params, None)
-    params.update(_optimise(obj, x0s, tick))
+    params.update(optimise(obj, x0s, tick))
     return params, [obj]
 
 
@@ -815,7 +824,7 @@ def _fit_channels(problem, cvars, params, base, tick):
                    if isinstance(v, np.ndarray) and v.size == C})
         obj = _Objective(problem, cvars, pc, c)
         objectives.append(obj)
-        for k, val in _optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
+        for k, val in optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
             per[k].append(val)
     params = dict(params)
     params.update({k: np.array(vals) for k, vals in per.items() if len(vals) == C})
