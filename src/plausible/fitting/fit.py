@@ -14,8 +14,15 @@ specifications with their ranges); the albedo comes from
    parameters with ``lo > 0`` and ``hi/lo >= 100`` (roughnesses) are optimised
    as ``ln p``, other non-negative ones with ``hi > 10`` (Phong exponents) as
    ``ln(1 + p)``, the rest linearly.
-3. **Multi-start** L-BFGS-B (SciPy, finite-difference gradients) from the
-   defaults and ``starts - 1`` seeded uniform points in the variables; a
+3. **Multi-start** from the defaults and ``starts - 1`` seeded uniform points in the
+   variables, by :func:`optimise` (the one optimiser, :func:`plausible.convert`'s too).
+   ``l2-cos`` and ``log``: ``scipy.optimize.least_squares`` on the residual vector
+   (:meth:`_Objective._residuals`; the Jacobian from one population of difference points),
+   the multi-start ending at the first repeated or exact optimum (:data:`PERFECT`), each
+   candidate a copy of one model built per objective (:func:`candidate`).  An isotropic
+   target is fitted with each anisotropic pair tied first (:data:`ANISOTROPY_MARGIN`);
+   every metric holds the target's highlight (:data:`plausible.fitting.metrics.HIGHLIGHT_BAND`).
+   ``perceptual``: L-BFGS-B (SciPy, finite-difference gradients); a
    parameter set the model rejects (``ValueError``, e.g. ``kd + ks > 1``) costs a
    penalty of ``1e6``.  The ``perceptual`` metric is minimised through its smooth
    log-sum-exp bound at ``beta = 20``, ``200`` and ``2000`` in turn (each from
