@@ -491,12 +491,16 @@ def _albedo_warnings(alb):
 def _to_model(src, name, metric, starts, src_alb, warn):
     from ..analysis import albedo_curve
     from ..fitting import fit
-    from ..fitting.fit import UnconstrainedWarning
+    from ..fitting.fit import BoundWarning, UnconstrainedWarning
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UnconstrainedWarning)
+        warnings.simplefilter("always", BoundWarning)
         r = fit(name, src.model, metric, starts=starts)
     notes = list(src.notes) + [str(w.message) for w in caught if issubclass(w.category, UnconstrainedWarning)]
+    notes += r.notes
+    # a parameter at an end of its range: a warning of the conversion (the report's and the command's)
+    warn = warn + [str(w.message) for w in caught if issubclass(w.category, BoundWarning)]
     a = np.asarray(albedo_curve(r.model, thetas_deg=REPORT_THETAS).value, float)
     tgt_alb = np.broadcast_to(a.reshape(len(REPORT_THETAS), -1), (len(REPORT_THETAS), 3))
     alb = _albedo_report(src_alb, tgt_alb)
