@@ -154,3 +154,18 @@ def test_published_fits_converted_to_gltf_keep_their_highlight(spec):
     assert np.all((q > 0.5) & (q < 2.0)), (q, c.items[0].params)
     if c.items[0].albedo["0"]["max_abs_difference"] > 0.05:
         assert any("albedo differs" in w for w in c.items[0].warnings)
+
+
+def test_candidate_is_the_model_built_again_and_refuses_what_the_model_refuses():
+    """``fit.candidate``: a copy of one model with new values evaluates as the class built at
+    those values does (bitwise, NumPy), and the model's own constraint between parameters
+    still raises (Modified Phong's kd + ks <= 1)."""
+    wi, wo = direction(0.4, 0.3), direction(0.6, 2.9)
+    for name, values in (("ashikhmin-shirley", dict(nu=30.0, nv=70.0, rs=0.2, rd=0.5)),
+                         ("modified-phong", dict(kd=0.3, ks=0.6, n=12.0))):
+        proto = plausible.make(name)
+        got = FIT.candidate(proto, values)
+        assert got.eval(wi, wo) == plausible.make(name, **values).eval(wi, wo)
+        assert dict(got.params) == dict(plausible.make(name, **values).params)
+    with pytest.raises(ValueError, match="kd"):
+        FIT.candidate(plausible.make("modified-phong"), dict(kd=0.6, ks=0.6, n=12.0))

@@ -359,14 +359,17 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
         from .. import registry
 
         registry.info(to)    # a clear error for an unknown name
+    from threadpoolctl import threadpool_limits
+
     items = []
-    for src in read_sources(source):
-        src_alb = _source_albedo(src.model)
-        warn = _conserving(src, src_alb)
-        if to.startswith("mitsuba") or to == "gltf":
-            items.append(_to_mitsuba(src, family, metric, src_alb, warn))
-        else:
-            items.append(_to_model(src, to, metric, starts, src_alb, warn))
+    with threadpool_limits(limits=1, user_api="blas"):     # as plausible.fit: a few variables, one thread
+        for src in read_sources(source):
+            src_alb = _source_albedo(src.model)
+            warn = _conserving(src, src_alb)
+            if to.startswith("mitsuba") or to == "gltf":
+                items.append(_to_mitsuba(src, family, metric, src_alb, warn))
+            else:
+                items.append(_to_model(src, to, metric, starts, src_alb, warn))
     return Conversion(to, metric, items)
 
 
