@@ -10,7 +10,9 @@ colours per channel, identifiability, the accurate albedo of the result), then w
 Jacobian rule (:data:`plausible.fitting.fit.JACOBIAN`).  Both on one BLAS thread.  The target
 (pairs, values, accurate albedo) is built once, outside every timing.
 
-Run: ``PYTHONPATH=src python benchmarks/fitter.py``; prints a Markdown table.
+Run: ``PYTHONPATH=src python benchmarks/fitter.py``; prints a Markdown table.  With
+``--convert``: the CPU and wall seconds of :func:`plausible.convert` of a few published fits to
+Mitsuba and glTF, after one warm-up conversion (Mitsuba imported before).
 """
 
 from __future__ import annotations
@@ -68,7 +70,30 @@ def ours(name, tgt, jacobian):
     return r, time.process_time() - t0
 
 
+CONVERSIONS = ("material:nickel@ngan2005/ward", "material:alum-bronze@ngan2005/ward",
+               "material:gold-metallic-paint@low2012/smooth-e2")
+
+
+def conversions():
+    import mitsuba  # noqa: F401  (imported before the timings)
+
+    plausible.convert("lambertian:rd=0.5", to="mitsuba")
+    print("| source | to | chosen | CPU s | wall s |\n|---|---|---|---|---|")
+    for spec in CONVERSIONS:
+        for to in ("mitsuba", "gltf"):
+            t0, c0 = time.time(), time.process_time()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                c = plausible.convert(spec, to=to)
+            print(f"| {spec} | {to} | {c.items[0].target} | {time.process_time() - c0:.1f} | "
+                  f"{time.time() - t0:.1f} |", flush=True)
+
+
 def main():
+    import sys
+
+    if "--convert" in sys.argv[1:]:
+        return conversions()
     print("| model | target | plain least_squares: CPU s (evaluations), l2-cos | plausible.fit, population "
           "Jacobian: CPU s (evaluations), l2-cos | ratio | plausible.fit, 2-point: CPU s, l2-cos |")
     print("|---|---|---|---|---|---|")
