@@ -757,7 +757,7 @@ def _fmt_alb(v, e):
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(0), help="Seed of the random starts.")
 def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     """Fit MODEL's parameters to a target; -p fixes parameters of MODEL."""
-    from .fitting import UnconstrainedWarning, fit as run_fit
+    from .fitting import BoundWarning, UnconstrainedWarning, fit as run_fit
     from .fitting.plots import write_plots
     from .plotting import check_new_dir
 
@@ -766,6 +766,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
             check_new_dir(out, "--out")
         with warnings.catch_warnings(record=True) as caught:     # printed below, as the command's own line
             warnings.simplefilter("always", UnconstrainedWarning)
+            warnings.simplefilter("always", BoundWarning)
             res = run_fit(model, target, metric, fixed=registry.parse_assignments(params), starts=starts,
                           seed=seed, time_limit=time_limit, progress=_bar())
     except ValueError as e:
@@ -782,11 +783,15 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     for k, v in res.errors.items():
         e.add_row(k, "n/a (no target albedo)" if v is None else f"{v:.6g}")
     console.print(e)
+    for note in res.notes:
+        console.print(escape(note), soft_wrap=True)
     if res.timed_out:
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
     for w in caught:
         if issubclass(w.category, UnconstrainedWarning):
             console.print(f"[yellow]warning:[/yellow] {escape(str(w.message))}", soft_wrap=True)
+        elif issubclass(w.category, BoundWarning):
+            click.echo(f"warning: {w.message}", err=True)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if out is not None:

@@ -56,3 +56,23 @@ def test_fit_bad_input(tmp_path):
     bad.write_text("1,2,3\n")
     r = run(main, ["fit", "modified-phong", "--target", str(bad)])
     assert r.exit_code == 2 and "expected 7 or 9 columns" in r.output
+
+
+def test_fit_says_each_bound_on_stderr_and_keeps_an_isotropic_target_isotropic():
+    """Issue 40: ``plausible fit ashikhmin-shirley --target gold-metallic-paint --metric l2-cos``
+    gave nu 5.3, nv 0 and rd_r = 1 without a word.  Now nu = nv (the note says why) and every
+    parameter at an end of its range is named on standard error (exit 0)."""
+    r = CliRunner().invoke(main, ["fit", "ashikhmin-shirley", "--target",
+                                  "material:gold-metallic-paint@low2012/smooth-e2", "--metric", "l2-cos"])
+    assert r.exit_code == 0, r.output
+    rows = {line.split("│")[1].strip(): line.split("│")[2].strip() for line in r.stdout.splitlines()
+            if line.count("│") == 3}
+    assert rows["nu"] == rows["nv"]
+    assert "isotropic target" in r.stdout
+    assert "warning:" not in r.stdout
+    for name in ("rs", "rd"):        # each channel printed as exactly 0 or 1 is named on stderr
+        for i, v in enumerate(rows[name].split(",")):
+            if v in ("0", "1"):
+                end = "lower bound 0" if v == "0" else "upper bound 1"
+                assert f"{name}[{i}] = {v} (its {end})" in r.stderr
+    assert r.stderr.count("its upper bound") + r.stderr.count("its lower bound") >= 1

@@ -294,17 +294,18 @@ def test_merged_starts_give_the_unmerged_result(monkeypatch):
     (``MERGE_TOL`` < 0: no start stops) to 1e-9, with fewer evaluations, and the
     parameters to 1e-4: the perceptual figure, a maximum, is flat to 1e-11 along
     a direction at this optimum, and which start's polish wins by 4e-12 moves
-    ``n`` by 5e-5 relative (measured).  Here the third start's optimum at
-    ``beta = 20`` repeats the first's to 1e-7 of the ranges; under ``l2-cos``
+    ``n`` by 5e-5 relative (measured).  Here (seed 1) a later start's optimum at
+    ``beta = 20`` repeats the first's (seed 0's starts stopped meeting there once the
+    fit held the highlight, issue 40: 673 evaluations merged against 962); under ``l2-cos``
     these starts stall at different points of the ``kd + ks = 1`` cliff and all
     run to the end."""
     import importlib
 
     fitmod = importlib.import_module("plausible.fitting.fit")
     data = _data(*MP, noise=0.01)       # a non-zero optimum: its value is compared relatively
-    merged = fit("modified-phong", data, "perceptual", starts=3, seed=0)
+    merged = fit("modified-phong", data, "perceptual", starts=3, seed=1)
     monkeypatch.setattr(fitmod, "MERGE_TOL", -1.0)
-    full = fit("modified-phong", data, "perceptual", starts=3, seed=0)
+    full = fit("modified-phong", data, "perceptual", starts=3, seed=1)
     assert merged.evaluations < full.evaluations
     assert merged.errors["perceptual"] == pytest.approx(full.errors["perceptual"], rel=1e-9)
     for k in MP[1]:

@@ -387,22 +387,25 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
         from .. import registry
 
         registry.info(to)    # a clear error for an unknown name
+    from threadpoolctl import threadpool_limits
+
     items, skipped = [], []
-    for src in read_sources(source):
-        why = src.refused or _refusal(src, to)
-        if why:
-            skipped.append({"name": src.name, "skipped": why})
-            continue
-        if "glass" in src.surface:
-            items.append(_glass(src, to))
-            continue
-        src_alb = _source_albedo(src.model)
-        warn = list(src.warnings) + _conserving(src, src_alb)
-        if to.startswith("mitsuba") or to == "gltf":
-            c = _to_mitsuba(src, family, metric, src_alb, warn)
-        else:
-            c = _to_model(src, to, metric, starts, src_alb, warn)
-        items.append(_with_surface(c, src, to))
+    with threadpool_limits(limits=1, user_api="blas"):     # as plausible.fit: a few variables, one thread
+        for src in read_sources(source):
+            why = src.refused or _refusal(src, to)
+            if why:
+                skipped.append({"name": src.name, "skipped": why})
+                continue
+            if "glass" in src.surface:
+                items.append(_glass(src, to))
+                continue
+            src_alb = _source_albedo(src.model)
+            warn = list(src.warnings) + _conserving(src, src_alb)
+            if to.startswith("mitsuba") or to == "gltf":
+                c = _to_mitsuba(src, family, metric, src_alb, warn)
+            else:
+                c = _to_model(src, to, metric, starts, src_alb, warn)
+            items.append(_with_surface(c, src, to))
     return Conversion(to, metric, items, skipped)
 
 
@@ -718,12 +721,16 @@ def _albedo_warnings(alb):
 def _to_model(src, name, metric, starts, src_alb, warn):
     from ..analysis import albedo_curve
     from ..fitting import fit
-    from ..fitting.fit import UnconstrainedWarning
+    from ..fitting.fit import BoundWarning, UnconstrainedWarning
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UnconstrainedWarning)
+        warnings.simplefilter("always", BoundWarning)
         r = fit(name, src.model, metric, starts=starts)
     notes = list(src.notes) + [str(w.message) for w in caught if issubclass(w.category, UnconstrainedWarning)]
+    notes += r.notes
+    # a parameter at an end of its range: a warning of the conversion (the report's and the command's)
+    warn = warn + [str(w.message) for w in caught if issubclass(w.category, BoundWarning)]
     a = np.asarray(albedo_curve(r.model, thetas_deg=REPORT_THETAS).value, float)
     tgt_alb = np.broadcast_to(a.reshape(len(REPORT_THETAS), -1), (len(REPORT_THETAS), 3))
     alb = _albedo_report(src_alb, tgt_alb)

@@ -351,11 +351,21 @@ def _band(a, A, rows, hard=False):
     return BAND_WEIGHT * max(0.0, d - BAND) + (HARD_WEIGHT * max(0.0, d - BAND_HARD) if hard else 0.0)
 
 
-def _figure(metric, F, Alb, x, g, A, eps, rows=None, hard=False):
+def _highlight(c, g, eps, hl):
+    """The highlight's cost (:func:`plausible.fitting.metrics.highlight_excess`, as in
+    :func:`plausible.fit`) of ``c`` against ``g`` ((K, C): channel means) at the rows ``hl``;
+    0 without rows."""
+    if hl is None:
+        return 0.0
+    return M.HIGHLIGHT_WEIGHT * float(np.sum(M.highlight_excess(c.mean(axis=-1), g.mean(axis=-1), hl, eps) ** 2))
+
+
+def _figure(metric, F, Alb, x, g, A, eps, rows=None, hard=False, hl=None):
     a = _predict(Alb, x)
-    e = M.errors(_predict(F, x), g, a, A, eps)
+    c = _predict(F, x)
+    e = M.errors(c, g, a, A, eps)
     base = e["fcos_max"] + ALBEDO_WEIGHT * e["albedo_max"] if metric == "perceptual" else e[metric]
-    return base + _band(a, A, rows, hard), e
+    return base + _band(a, A, rows, hard) + _highlight(c, g, eps, hl), e
 
 
 #: Weight of the albedo rows of the least squares, beyond equal weight of the two sets.
@@ -415,41 +425,79 @@ def _within_band(R, r, Alb, Ac, band, x0):
     return x if np.all(np.abs(P @ x - q) <= BAND_HARD) else xf
 
 
-def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False):
-    """Step 4 on each channel; the better of ``x`` and the polished point per channel."""
-    from scipy.optimize import minimize
+class ColourObjective:
+    """The colours of one channel at one point of a family's axes (slots ``0..J-1`` in
+    ``[0, 1]``), as an objective of the fitter's optimiser
+    (:func:`plausible.fitting.fit.optimise`, whose protocol it follows): so step 4 runs the
+    optimiser of :func:`plausible.fit`, not one of its own.  ``fun(z)`` is the figure
+    minimised (:func:`_figure`), ``fun(z, beta)`` its smooth bound (``perceptual``: the
+    maxima's log-sum-exp bounds, the albedo weighted by :data:`ALBEDO_WEIGHT`);
+    :meth:`residuals_many` the least-squares metrics' residuals, the band's and the
+    highlight's excesses as rows (``sqrt(weight) excess``).  The best point by the figure is
+    kept in ``best_x``."""
+
+    def __init__(self, F, Alb, gc, Ac, eps, metric, rows=None, hard=False, hl=None):
+        from types import SimpleNamespace
+
+        self.F, self.Alb, self.gc, self.Ac, self.eps = F, Alb, gc, Ac, eps
+        self.rows, self.hard, self.hl = rows, hard, hl
+        self.vars = [SimpleNamespace(name=j, bounds=(0.0, 1.0)) for j in range(F.shape[0] - 1)]
+        self.problem = SimpleNamespace(metric=metric, maxiter=200)
+        self.best_x, self.best_value = None, math.inf
+        self.rejected, self.timed_out, self.fd = 0, False, None
+
+    def _keep(self, z, v):
+        if v < self.best_value:
+            self.best_x, self.best_value = np.array(z, float), v
+        return v
+
+    def __call__(self, z, beta=None):
+        z = np.clip(np.asarray(z, float), 0.0, 1.0)[:, None]
+        if beta is None:
+            return self._keep(z[:, 0], _figure(self.problem.metric, self.F, self.Alb, z, self.gc, self.Ac, self.eps,
+                                               self.rows, self.hard, self.hl)[0])
+        c, a = _predict(self.F, z), _predict(self.Alb, z)
+        pen = _band(a, self.Ac, self.rows, self.hard) + _highlight(c, self.gc, self.eps, self.hl)
+        return (M.objective("perceptual", c, self.gc, eps=self.eps, beta=beta)
+                + ALBEDO_WEIGHT * M.objective("perceptual", a, self.Ac, eps=1e-12, beta=beta) + pen)
+
+    def residuals_many(self, xs) -> list:
+        return [self._residuals(np.clip(np.asarray(z, float), 0.0, 1.0)) for z in xs]
+
+    def _residuals(self, z):
+        c, a = _predict(self.F, z[:, None])[:, 0], _predict(self.Alb, z[:, None])[:, 0]
+        g, A = self.gc[:, 0], self.Ac[:, 0]
+        if self.problem.metric == "l2-cos":
+            r = (c - g) / math.sqrt(max(float(np.sum(g * g)), 1e-300))
+        else:
+            r = M._lr(c, g, self.eps) / math.sqrt(len(g))
+        out = [r]
+        if self.hl is not None:
+            out.append(math.sqrt(M.HIGHLIGHT_WEIGHT) * M.highlight_excess(c, g, self.hl, self.eps))
+        if self.rows is not None and len(a) == len(A):
+            d = np.abs(a[self.rows] - A[self.rows])
+            out.append(math.sqrt(BAND_WEIGHT) * np.maximum(d - BAND, 0.0))
+            if self.hard:
+                out.append(math.sqrt(HARD_WEIGHT) * np.maximum(d - BAND_HARD, 0.0))
+        self(z)                                  # the figure, and the best point by it
+        return np.concatenate(out)
+
+    def best_params(self, x0) -> dict:
+        x = self.best_x if self.best_x is not None else np.asarray(x0, float)
+        return {v.name: float(xi) for v, xi in zip(self.vars, x)}
+
+
+def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
+    """Step 4 on each channel by the fitter's optimiser (:class:`ColourObjective`); the
+    better of ``x`` and the polished point per channel."""
+    from ..fitting.fit import optimise
 
     x = x.copy()
-    J = x.shape[0]
-    bounds = [(0.0, 1.0)] * J
     for c in range(x.shape[1]):
-        gc, Ac = g[:, c:c + 1], A[:, c:c + 1]
-
-        def true(z):
-            return _figure(metric, F, Alb, np.clip(z, 0, 1)[:, None], gc, Ac, eps, rows, hard)[0]
-
-        def smooth(z, beta):
-            z = np.clip(z, 0, 1)[:, None]
-            c, a = _predict(F, z), _predict(Alb, z)
-            band = _band(a, Ac, rows, hard)
-            if metric != "perceptual":
-                return M.objective(metric, c, gc, a, Ac, eps, beta=beta) + band
-            return (M.objective(metric, c, gc, eps=eps, beta=beta)
-                    + ALBEDO_WEIGHT * M.objective(metric, a, Ac, eps=1e-12, beta=beta) + band)
-
-        z = x[:, c].copy()
-        best, best_v = z.copy(), true(z)
-        betas = (20.0, 200.0, 2000.0) if metric == "perceptual" else (None,)
-        for beta in betas:
-            r = minimize((lambda q: smooth(q, beta)) if beta else true, z, method="L-BFGS-B", bounds=bounds)
-            z = np.clip(r.x, 0, 1)
-        r = minimize(true, z, method="Nelder-Mead", bounds=bounds,
-                     options=dict(maxfev=80 * (J + 1), xatol=1e-7, fatol=1e-10))
-        for cand in (z, np.clip(r.x, 0, 1)):
-            v = true(cand)
-            if v < best_v:
-                best, best_v = cand.copy(), v
-        x[:, c] = best
+        obj = ColourObjective(F, Alb, g[:, c:c + 1], A[:, c:c + 1], eps, metric, rows, hard, hl)
+        obj(x[:, c])                             # the start is a candidate: never worse than it
+        optimise(obj, [x[:, c].copy()], lambda: None)
+        x[:, c] = obj.best_x
     return x
 
 
@@ -506,13 +554,14 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     g, A = target if target is not None else source_target(source, probe)
     eps = M.floor(g)
     rows = [int(np.argmin(np.abs(probe.thetas - math.radians(t)))) for t in REPORT_THETAS]
+    hl = M.highlight_rows(probe.wi, g)          # the highlight held as in plausible.fit
     count = [0]
 
     def score(point):
         count[0] += 1
         F, Alb = basis(probe, fam, point)
         x = _lsq(F, Alb, g, A, eps, metric, rows if hard else None)
-        return _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0], x
+        return _figure(metric, F, Alb, x, g, A, eps, rows, hard, hl)[0], x
 
     # 2. scan
     grid = [dict(zip([a.name for a in fam.axes], vals))
@@ -533,8 +582,8 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
             best[ax.name] = ax.inv(float(r.x))
     F, Alb = basis(probe, fam, best)
     # 4. polish the colours
-    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard)
-    figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard)[0]
+    x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard, hl)
+    figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard, hl)[0]
     colours = {s: x[j] for j, s in enumerate(fam.slots)}
     d = fam.bsdf_dict(best, colours)
     # 5. measure the loaded result

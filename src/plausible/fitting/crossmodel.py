@@ -31,14 +31,14 @@ def run(target=TARGET, models=MODELS, metrics=METRICS, starts=2, seed=0, progres
 
 def markdown(results) -> str:
     """The results as a Markdown table."""
-    lines = ["| model | metric | parameters | l2-cos | log | E_f (max, f cos) | E_a (max, albedo) | time (s) |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| model | metric | parameters | l2-cos | log | E_f (max, f cos) | E_a (max, albedo) | highlight | time (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         free = {k: v for k, v in r.params.items() if not isinstance(v, str)}
         ps = ", ".join(f"{k}={float(v):.4g}" for k, v in free.items() if v is not None)
         e = r.errors
         lines.append(f"| {r.model.name} | {r.metric} | {ps} | {e['l2-cos']:.4f} | {e['log']:.4f} | "
-                     f"{e['fcos_max']:.4f} | {e['albedo_max']:.4f} | {r.seconds:.0f} |")
+                     f"{e['fcos_max']:.4f} | {e['albedo_max']:.4f} | {e['highlight']:.4f} | {r.seconds:.0f} |")
     return "\n".join(lines)
 
 

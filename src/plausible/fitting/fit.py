@@ -14,8 +14,15 @@ specifications with their ranges); the albedo comes from
    parameters with ``lo > 0`` and ``hi/lo >= 100`` (roughnesses) are optimised
    as ``ln p``, other non-negative ones with ``hi > 10`` (Phong exponents) as
    ``ln(1 + p)``, the rest linearly.
-3. **Multi-start** L-BFGS-B (SciPy, finite-difference gradients) from the
-   defaults and ``starts - 1`` seeded uniform points in the variables; a
+3. **Multi-start** from the defaults and ``starts - 1`` seeded uniform points in the
+   variables, by :func:`optimise` (the one optimiser, :func:`plausible.convert`'s too).
+   ``l2-cos`` and ``log``: ``scipy.optimize.least_squares`` on the residual vector
+   (:meth:`_Objective._residuals`; the Jacobian from one population of difference points),
+   the multi-start ending at the first repeated or exact optimum (:data:`PERFECT`), each
+   candidate a copy of one model built per objective (:func:`candidate`).  An isotropic
+   target is fitted with each anisotropic pair tied first (:data:`ANISOTROPY_MARGIN`);
+   every metric holds the target's highlight (:data:`plausible.fitting.metrics.HIGHLIGHT_BAND`).
+   ``perceptual``: L-BFGS-B (SciPy, finite-difference gradients); a
    parameter set the model rejects (``ValueError``, e.g. ``kd + ks > 1``) costs a
    penalty of ``1e6``.  The ``perceptual`` metric is minimised through its smooth
    log-sum-exp bound at ``beta = 20``, ``200`` and ``2000`` in turn (each from
@@ -47,16 +54,18 @@ specifications with their ranges); the albedo comes from
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 import warnings
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
 from .. import registry
 from ..analysis import albedo_curve, direction
-from ..bxdf import BxDF
+from ..bxdf import BxDF, Params
 from ..progress import start
 from ..text import fmt
 from . import metrics as M
@@ -69,8 +78,11 @@ EXPONENT_CAP = 1e5
 # -- the parameter space ---------------------------------------------------------------
 
 class _Var:
-    def __init__(self, p):
-        self.name, self.is_color = p.name, p.is_color
+    """One variable of the optimiser: parameter ``p`` in its transform (step 2);
+    ``tied``: parameters that take the same value (an isotropic lobe's ``nv`` with ``nu``)."""
+
+    def __init__(self, p, tied=()):
+        self.name, self.is_color, self.tied = p.name, p.is_color, tuple(tied)
         lo = -1e3 if p.lo == -math.inf else p.lo
         hi = 1e3 if p.hi == math.inf else p.hi
         if lo > 0 and hi / lo >= 100:
@@ -144,6 +156,11 @@ class FitResult:
     #: Groups of parameters along a flat direction of the objective at the
     #: solution (step 5 of :mod:`plausible.fitting.fit`): values the target does not decide.
     unconstrained: list = field(default_factory=list)
+    #: Parameters (channels) that ended at an end of their range (:func:`at_bounds`); a
+    #: :class:`BoundWarning` names them too.
+    at_bounds: list = field(default_factory=list)
+    #: What the procedure decided (an isotropic target's lobe kept isotropic, or not, and why).
+    notes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         """Plain data (JSON): model, metric, parameters, errors, target label."""
@@ -152,7 +169,8 @@ class FitResult:
         return {"model": self.model.name, "metric": self.metric, "target": self.target.label,
                 "params": {k: conv(v) for k, v in self.params.items()}, "errors": dict(self.errors),
                 "evaluations": self.evaluations, "timed_out": self.timed_out, "seconds": self.seconds,
-                "unconstrained": [list(g) for g in self.unconstrained]}
+                "unconstrained": [list(g) for g in self.unconstrained], "at_bounds": list(self.at_bounds),
+                "notes": list(self.notes)}
 
     def _repr_html_(self) -> str:
         from ..text import html_table
@@ -193,8 +211,19 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     relative errors of ``f cos`` and of the albedo (Neumann, Neumann &
     Szirmay-Kalos 1999, section 1.1).  Returns a :class:`FitResult`.
 
-    The steps are those of the module docstring.
+    The steps are those of the module docstring.  The fit runs with one BLAS thread
+    (``threadpoolctl``): two OpenBLAS threads for a problem of a few variables cost 12
+    times the CPU of one (issue 40).
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg,
+                    target_albedo, maxiter, combine)
+
+
+def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg, target_albedo,
+         maxiter, combine):
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
     M.check_combine(combine)
@@ -210,11 +239,18 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     # 1. free parameters; a parameter whose default is None resolves from the
     # others (neumann-metal's c): leave it out so that it follows them
     base = {k: v for k, v in proto.params.items() if k in fixed or info.param(k).default is not None}
-    vars_ = [_Var(p) for p in _free_params(info, proto, fixed, tgt)]
+    free = _free_params(info, proto, fixed, tgt)
+    vars_ = [_Var(p) for p in free]
     colour_vars = [v for v in vars_ if v.is_color] if tgt.channels else []
-    tick = start(progress, starts + (tgt.channels if colour_vars else 0), f"fit {model_name}")
-    # 2-3. multi-start on the channel mean, colours as scalars
-    params, objectives = _fit_shared(problem, vars_, base, starts, seed, tick)
+    pairs = _anisotropic_pairs(free) if is_isotropic(tgt) else []
+    tick = start(progress, starts + bool(pairs) + (tgt.channels if colour_vars else 0), f"fit {model_name}")
+    # 2-3. multi-start on the channel mean, colours as scalars (an isotropic target: the lobe isotropic first)
+    notes = []
+    if pairs:
+        params, objectives, note = _fit_isotropic_first(problem, free, pairs, base, starts, seed, tick)
+        notes.append(note)
+    else:
+        params, objectives = _fit_shared(problem, vars_, base, starts, seed, tick)
     # 4. colours per channel
     if colour_vars and not any(o.timed_out for o in objectives):
         params, more = _fit_channels(problem, colour_vars, params, base, tick)
@@ -226,13 +262,118 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     if flat:
         warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(_flat_text(g) for g in flat)
                       + " (the samples do not decide them; fix one with fixed={...} or add samples that do)",
-                      UnconstrainedWarning, stacklevel=2)
-    # 6. every metric's figure, albedo by the accurate integrator
+                      UnconstrainedWarning, stacklevel=3)
+    # 6. every metric's figure, albedo by the accurate integrator; parameters at their bounds said aloud
     model = info.cls(**params)
     out = evaluate_fit(model, tgt, problem.eps, combine)
+    bounds = at_bounds(vars_, params)
+    if bounds:
+        warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(bounds)
+                      + " (the optimum lies on the edge of the range: the model cannot follow the target there, "
+                        "or a wider range would fit better)", BoundWarning, stacklevel=3)
     return FitResult(model, {k: model.params[k] for k in model.params}, metric, out["errors"], tgt,
                      sum(o.evaluations for o in objectives), any(o.timed_out for o in objectives),
-                     time.monotonic() - t0, out["albedo"], flat)
+                     time.monotonic() - t0, out["albedo"], flat, bounds, notes)
+
+
+#: Parameter pairs of an anisotropic lobe: the exponents or roughnesses along the two tangents.
+ANISOTROPIC_PAIRS = (("nu", "nv"), ("alpha_x", "alpha_y"))
+#: An isotropic target gets an anisotropic fit only where that lowers the figure minimised
+#: by more than this fraction of the isotropic fit's (otherwise the isotropic fit is kept).
+ANISOTROPY_MARGIN = 0.05
+#: A parameter ends at a bound when its variable is within this fraction of the variable's
+#: range of the bound.
+BOUND_TOL = 1e-6
+
+
+def is_isotropic(tgt: Target, turn: float = 0.61) -> bool:
+    """Whether ``tgt`` is a model whose ``f`` is unchanged (to 1e-9 relative) when every pair
+    turns by ``turn`` radians about the normal; False for a table (nothing to turn)."""
+    m = tgt.model
+    if m is None:
+        return False
+    c, s = math.cos(turn), math.sin(turn)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
+    f0, f1 = np.asarray(m.eval(wi, tgt.wo)), np.asarray(m.eval(wi @ R.T, tgt.wo @ R.T))
+    return bool(np.allclose(f1, f0, rtol=1e-9, atol=1e-12 * float(np.max(np.abs(f0), initial=0.0))))
+
+
+def _anisotropic_pairs(free) -> list:
+    names = {p.name for p in free}
+    return [(a, b) for a, b in ANISOTROPIC_PAIRS if a in names and b in names]
+
+
+def _fit_isotropic_first(problem, free, pairs, base, starts, seed, tick):
+    """Steps 2-3 for an isotropic target: the lobe isotropic (each pair of
+    :data:`ANISOTROPIC_PAIRS` one variable), then one anisotropic start from there, kept
+    only where it lowers the figure by :data:`ANISOTROPY_MARGIN`.  Returns the parameters,
+    the objectives and a note saying which was kept and the figures."""
+    seconds = {b: a for a, b in pairs}
+    iso = [_Var(p, [b for a, b in pairs if a == p.name]) for p in free if p.name not in seconds]
+    params, objs = _fit_shared(problem, iso, base, starts, seed, tick)
+    for b, a in seconds.items():
+        params[b] = params[a]
+    iso_value = min(o.best_value for o in objs) if objs else math.inf
+    names = ", ".join(f"{a} = {b}" for a, b in pairs)
+    if iso_value <= PERFECT:
+        tick()
+        return params, objs, f"isotropic target: {names}, an exact fit (figure {iso_value:.3g})"
+    full = [_Var(p) for p in free]
+    obj = _Objective(problem, full, params, None)
+    aniso = dict(params)
+    try:
+        aniso.update(optimise(obj, [[v.fwd(params[v.name]) for v in full]], tick))
+    except _Timeout:
+        pass
+    if obj.best_value < (1.0 - ANISOTROPY_MARGIN) * iso_value:
+        return aniso, objs + [obj], (f"anisotropic fit kept: figure {obj.best_value:.4g} against {iso_value:.4g} "
+                                     f"with {names} (lower by more than {ANISOTROPY_MARGIN:.0%})")
+    return params, objs + [obj], (f"isotropic target: {names} kept (an anisotropic fit reached {obj.best_value:.4g} "
+                                  f"against {iso_value:.4g}, not lower by {ANISOTROPY_MARGIN:.0%})")
+
+
+def at_bounds(vars_, params) -> list:
+    """``"name = value (its lower/upper bound)"`` for each free parameter (each channel of
+    a colour) that ends within :data:`BOUND_TOL` of its range's end (in its variable)."""
+    out = []
+    for v in vars_:
+        vals = np.atleast_1d(np.asarray(params[v.name], float))
+        span = v.bounds[1] - v.bounds[0]
+        for i, val in enumerate(vals):
+            x = v.fwd(val)
+            end = ("lower", v.lo) if x - v.bounds[0] <= BOUND_TOL * span else (
+                ("upper", v.hi) if v.bounds[1] - x <= BOUND_TOL * span else None)
+            if end:
+                name = f"{v.name}[{i}]" if len(vals) > 1 else v.name
+                out.append(f"{name} = {fmt(float(val), '.6g')} (its {end[0]} bound {end[1]:g})")
+    return out
+
+
+class BoundWarning(UserWarning):
+    """A fit ended with a parameter at an end of its range."""
+
+
+def candidate(proto: BxDF, values: dict) -> BxDF:
+    """A model of ``proto``'s class at ``values`` without building it again: a copy of
+    ``proto`` with its parameter namespaces replaced (the parameters as data of one
+    model built once per fit; the issue measured 3,851 ``Param.validate`` calls in
+    one fit).  The values come from the optimiser's variables, which
+    :meth:`_Var.inv` keeps inside each parameter's range, so only the model's own
+    constraints between parameters (``_validate``: Modified Phong's ``kd + ks <= 1``)
+    are checked (ValueError as from the class).  A model that builds state of its own
+    in ``__init__`` or derives a parameter (Neumann's ``c``) is built by its class."""
+    cls = type(proto)
+    if cls.DERIVED or cls.__init__ is not BxDF.__init__ or cls._kernel_view is not BxDF._kernel_view:
+        return cls(**values)
+    m = copy.copy(proto)
+    vals = dict(proto.params)
+    vals.update(values)
+    m._params = Params(vals)
+    m.p = SimpleNamespace(**vals)
+    m.q = SimpleNamespace(**{k: (float(np.mean(v)) if isinstance(v, np.ndarray) else v) for k, v in vals.items()})
+    m._validate()
+    return m
 
 
 class UnconstrainedWarning(UserWarning):
@@ -362,12 +503,16 @@ class _Problem:
     maxiter: int
     deadline: float | None
     values: _Values | None = None
+    #: the target's highlight: its brightest pair per incidence (:func:`plausible.fitting.metrics.highlight_rows`)
+    rows: np.ndarray | None = None
 
     @classmethod
     def make(cls, info, proto, tgt, metric, combine, maxiter, deadline):
         use_albedo = metric == "perceptual" and tgt.albedo is not None
         fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
-        return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast))
+        wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
+        return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast),
+                   M.highlight_rows(wi, tgt.fcos))
 
 
 def _channel(g, c):
@@ -399,12 +544,20 @@ class _Objective:
         #: ``(step, upper bounds)`` while L-BFGS-B runs (see :meth:`many`), else None
         self.fd = None
         self._cache = {}
+        #: the model built (and validated) once; every candidate is a copy with new values
+        self._proto = None
+        #: candidates the model rejected (its ``_validate``)
+        self.rejected = 0
 
     def model_at(self, x):
         ps = dict(self.params0)
         for v, xi in zip(self.vars, x):
             ps[v.name] = v.inv(xi)
-        return self.problem.info.cls(**ps)
+            ps.update(dict.fromkeys(v.tied, ps[v.name]))
+        if self._proto is None:
+            self._proto = self.problem.info.cls(**ps)
+            return self._proto
+        return candidate(self._proto, ps)
 
     def __call__(self, x, beta=None):
         return self.many([x], beta)[0]
@@ -451,25 +604,67 @@ class _Objective:
             out.append(z)
         return out
 
-    def _evaluate(self, xs, beta) -> list:
+    def _candidates(self, xs):
+        """``(models, values)``: the model at each point (None where the model rejects it) and
+        an iterator over the values of those that exist, in order (one launch)."""
         models = []
         for x in xs:
             try:
                 models.append(self.model_at(x))
             except ValueError:
                 models.append(None)
-        vals = iter(self.problem.values.many([m for m in models if m is not None]))
+                self.rejected += 1
+        return models, iter(self.problem.values.many([m for m in models if m is not None]))
+
+    def _evaluate(self, xs, beta) -> list:
+        models, vals = self._candidates(xs)
         return [PENALTY if m is None else self._value(next(vals), beta) for m in models]
 
     def _value(self, values, beta):
         pb = self.problem
+        if pb.metric in LEAST_SQUARES:
+            return float(np.sum(self._residuals(values) ** 2))
         f, alb = values
         cc = _reduce(f, pb.tgt.wo, self.c)
         a = _reduce_alb(alb, self.c) if pb.fast else None
+        h = M.HIGHLIGHT_WEIGHT * float(np.sum(M.highlight_excess(cc, self.g, pb.rows, pb.eps) ** 2))
         if beta is None:
-            e = M.errors(cc, self.g, a, self.A, pb.eps, pb.combine)
-            return {"l2-cos": e["l2-cos"] ** 2, "log": e["log"] ** 2}.get(pb.metric, e["perceptual"])
-        return M.objective(pb.metric, cc, self.g, a, self.A, pb.eps, beta=beta, combine=pb.combine)
+            return M.errors(cc, self.g, a, self.A, pb.eps, pb.combine)["perceptual"] + h
+        return M.objective(pb.metric, cc, self.g, a, self.A, pb.eps, beta=beta, combine=pb.combine) + h
+
+    def _residuals(self, values) -> np.ndarray:
+        """The residual vector of a least-squares metric (:data:`LEAST_SQUARES`), whose sum of
+        squares is the figure squared plus the highlight's cost: ``(c - g) / |g|`` (``l2-cos``)
+        or ``ln((c + eps)/(g + eps)) / sqrt(N)`` (``log``), then ``sqrt(HIGHLIGHT_WEIGHT)`` times
+        :func:`plausible.fitting.metrics.highlight_excess`."""
+        pb = self.problem
+        c, g = _reduce(values[0], pb.tgt.wo, self.c), self.g
+        if pb.metric == "l2-cos":
+            den = float(np.sum(g * g))
+            r = (c - g) / math.sqrt(den) if den > 0 else c
+        else:
+            r = M._lr(c, g, pb.eps) / math.sqrt(c.size)
+        h = math.sqrt(M.HIGHLIGHT_WEIGHT) * M.highlight_excess(c, g, pb.rows, pb.eps)
+        return np.concatenate([r.reshape(-1), h])
+
+    def residuals_many(self, xs) -> list:
+        """:meth:`_residuals` of each candidate of ``xs`` (one launch, :meth:`_Values.many`); a
+        rejected candidate's residuals have the sum of squares :data:`PENALTY`.  Counts the
+        evaluations, keeps the best point, raises ``_Timeout`` past the deadline."""
+        pb = self.problem
+        if pb.deadline is not None and time.monotonic() > pb.deadline:
+            self.timed_out = True
+            raise _Timeout
+        models, vals = self._candidates(xs)
+        out = [None if m is None else self._residuals(next(vals)) for m in models]
+        size = np.size(self.g) + len(pb.rows)      # the residuals: one per pair, one per highlight row
+        out = [np.full(size, math.sqrt(PENALTY / size)) if r is None else r for r in out]
+        self.evaluations += len(xs)
+        for x, r in zip(xs, out):
+            v = float(np.sum(r * r))
+            if v < self.best_value:
+                self.best_value, self.best_x = v, np.array(x, float)
+        return out
 
     def best_params(self, x_default) -> dict:
         """The best point found as parameter values (``x_default`` if none was)."""
@@ -505,12 +700,63 @@ def _same_optimum(found, x, value, spans) -> bool:
                for y, w in found)
 
 
-def _optimise(fun: _Objective, x0s, tick) -> dict:
-    """Step 3 from each start in ``x0s``: L-BFGS-B (on the smooth bounds at
-    ``beta = 20, 200, 2000`` for ``perceptual``), then a bounded Nelder-Mead
-    polish on the true figure; a start whose first optimum repeats an earlier
-    start's stops there (:data:`MERGE_TOL`); ``tick()`` after each start; stop at
-    the deadline.  Returns the best point's parameter values."""
+#: A least-squares figure (squared) at or below this is an exact fit (relative RMS 1e-9): no
+#: further start, and no anisotropic attempt after an isotropic one.
+PERFECT = 1e-18
+#: The metrics fitted as least squares of a residual vector (:meth:`_Objective._residuals`).
+LEAST_SQUARES = ("l2-cos", "log")
+#: How the least-squares Jacobian is taken: ``"population"`` (forward differences of
+#: :data:`FD_STEP`, the ``n`` points and the point itself one launch, :meth:`_Values.many`) or
+#: ``"2-point"`` (SciPy's own differences, one evaluation at a time); benchmarks/fitter.py
+#: measures both (docs/benchmarks.md, issue 40).
+JACOBIAN = "population"
+
+
+def _least_squares(fun: _Objective, x0, bounds):
+    """``scipy.optimize.least_squares`` (trust-region reflective, within ``bounds``) on
+    :meth:`_Objective.residuals_many` from ``x0``; the Jacobian by :data:`JACOBIAN`."""
+    from scipy.optimize import least_squares
+
+    lo, hi = np.array([b[0] for b in bounds], float), np.array([b[1] for b in bounds], float)
+    x0 = np.clip(np.asarray(x0, float), lo, hi)
+    last = {}
+
+    def res(x):
+        r = fun.residuals_many([x])[0]
+        last["x"], last["r"] = np.array(x, float), r
+        return r
+
+    def jac(x):
+        x = np.asarray(x, float)
+        steps = np.where(x + FD_STEP <= hi, FD_STEP, -FD_STEP)
+        pts = [x + s * e for s, e in zip(steps, np.eye(len(x)))]
+        if "x" in last and np.array_equal(last["x"], x):
+            rs, r0 = fun.residuals_many(pts), last["r"]
+        else:
+            *rs, r0 = fun.residuals_many(pts + [x])
+        return np.column_stack([(r - r0) / s for r, s in zip(rs, steps)])
+
+    tol = 1e-12
+    return least_squares(res, x0, jac=jac if JACOBIAN == "population" else "2-point", bounds=(lo, hi),
+                         method="trf", x_scale="jac", ftol=tol, xtol=tol, gtol=tol,
+                         max_nfev=fun.problem.maxiter * (len(x0) + 1))
+
+
+def optimise(fun, x0s, tick) -> dict:
+    """Step 3 from each start in ``x0s``, the one optimiser of :func:`fit` and of
+    :func:`plausible.convert` (its Mitsuba families' colours,
+    :class:`plausible.conversion.mitsuba.ColourObjective`): least squares
+    (:func:`_least_squares`, :data:`LEAST_SQUARES` metrics) or, for ``perceptual``,
+    L-BFGS-B on the smooth bounds at ``beta = 20, 200, 2000`` then a bounded Nelder-Mead
+    polish on the true figure; the multi-start ends once a start repeats an earlier
+    start's optimum (:data:`MERGE_TOL`) or fits exactly (:data:`PERFECT`); ``tick()``
+    after each start; stop at the deadline.  Returns the best point's parameter values.
+
+    ``fun``, the objective (an :class:`_Objective`, or an adapter with the same
+    attributes): ``vars`` (each with ``bounds``), ``problem.metric`` and
+    ``problem.maxiter``, ``fun(x)`` the true figure and ``fun(x, beta)`` its smooth
+    bound, ``residuals_many(xs)`` (least squares), the best point kept in ``best_x``,
+    ``best_value``, ``best_params(x0)``, and ``rejected``, ``timed_out``, ``fd``."""
     from scipy.optimize import minimize
 
     bounds = [v.bounds for v in fun.vars]
@@ -534,12 +780,17 @@ def _optimise(fun: _Objective, x0s, tick) -> dict:
                     minimize(fun, x, method="Nelder-Mead", bounds=bounds,
                              options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
             else:
-                r = _lbfgsb(fun, x, None, bounds, maxiter=maxiter, ftol=1e-14, gtol=1e-10)
-                fun(r.x)
-                if not _same_optimum(found, r.x, float(r.fun), spans):
-                    found.append((r.x, float(r.fun)))
-                    # derivative-free polish: L-BFGS-B stops where a constraint the model
-                    # enforces by ValueError (kd + ks <= 1) cuts its line search
+                rejected = fun.rejected
+                r = _least_squares(fun, x, bounds)
+                value = 2.0 * float(r.cost)
+                if _same_optimum(found, r.x, value, spans) or fun.best_value <= PERFECT:
+                    for _ in range(len(x0s) - len(found)):
+                        tick()      # this start and the ones skipped: the bar completes
+                    break           # an optimum found before, or an exact fit: more starts would repeat it
+                found.append((r.x, value))
+                if fun.rejected > rejected:
+                    # derivative-free polish: the trust region stops where a constraint the model
+                    # enforces by ValueError (kd + ks <= 1) cuts it
                     minimize(fun, fun.best_x, method="Nelder-Mead", bounds=bounds,
                              options=dict(maxfev=200 * (len(x) + 1), xatol=1e-9, fatol=1e-16))
         except _Timeout:
@@ -563,7 +814,7 @@ def _fit_shared(problem, vars_, base, starts, seed, tick):
     x0s = [x_def] + [[rng.uniform(*v.bounds) for v in vars_] for _ in range(starts - 1)]
     x0s = [_feasible(problem.info, params, vars_, x, rng) for x in x0s]
     obj = _Objective(problem, vars_, params, None)
-    params.update(_optimise(obj, x0s, tick))
+    params.update(optimise(obj, x0s, tick))
     return params, [obj]
 
 
@@ -580,7 +831,7 @@ def _fit_channels(problem, cvars, params, base, tick):
                    if isinstance(v, np.ndarray) and v.size == C})
         obj = _Objective(problem, cvars, pc, c)
         objectives.append(obj)
-        for k, val in _optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
+        for k, val in optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
             per[k].append(val)
     params = dict(params)
     params.update({k: np.array(vals) for k, vals in per.items() if len(vals) == C})
@@ -655,6 +906,7 @@ def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
 
     Example: ``evaluate_fit(fit.model, "material:nickel@ngan2005/ward")["errors"]["log"]``."""
     tgt = as_target(target)
+    rows = M.highlight_rows(np.broadcast_to(tgt.wi, np.shape(tgt.wo)), tgt.fcos)
     f = _fcos(model.eval(tgt.wi, tgt.wo), tgt.wo)
     g = tgt.fcos
     if f.ndim < g.ndim:
@@ -669,4 +921,4 @@ def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
             a = np.broadcast_to(a[:, None], A.shape)
         elif a.ndim > A.ndim:
             a = a.mean(axis=-1)
-    return {"errors": M.errors(f, g, a, A, eps, combine), "albedo": a}
+    return {"errors": M.errors(f, g, a, A, eps, combine, rows), "albedo": a}

@@ -76,10 +76,12 @@ def _combine(ef, ea, combine):
     return ef + ea if check_combine(combine) == "sum" else max(ef, ea)
 
 
-def errors(c, g, a=None, A=None, eps=None, combine: str = "sum") -> dict:
+def errors(c, g, a=None, A=None, eps=None, combine: str = "sum", rows=None) -> dict:
     """Every metric's figure for candidate values ``c`` against target ``g`` (f cos),
     and albedos ``a`` against ``A`` when given.  Keys: ``l2-cos``, ``log``,
-    ``perceptual``, ``fcos_max`` (``E_f``), ``albedo_max`` (``E_a``, or None)."""
+    ``perceptual``, ``fcos_max`` (``E_f``), ``albedo_max`` (``E_a``, or None); with the
+    highlight ``rows`` (:func:`highlight_rows`) also ``highlight``, the largest
+    ``|ln|`` ratio of ``f cos`` at them (``ln 2``: a highlight half or twice the target's)."""
     c, g = np.asarray(c, float), np.asarray(g, float)
     if c.shape != g.shape:
         raise ValueError(f"candidate and target shapes differ: {c.shape} vs {g.shape}")
@@ -94,7 +96,54 @@ def errors(c, g, a=None, A=None, eps=None, combine: str = "sum") -> dict:
     else:
         out["albedo_max"] = None
         out["perceptual"] = out["fcos_max"]
+    if rows is not None:
+        out["highlight"] = float(np.max(np.abs(lr.reshape(len(lr), -1)[rows]))) if len(rows) else 0.0
     return out
+
+
+#: The highlight band: a fit keeps the target's highlight when its ``f cos`` at the target's
+#: brightest sample of every incidence (:func:`highlight_rows`) is within this factor of the
+#: target's.  Beyond it each log unit of excess costs :data:`HIGHLIGHT_WEIGHT` times its square
+#: in what the fit minimises (:func:`highlight_excess`): a constraint the fit meets wherever the
+#: model can, and no cost at all inside the band, so a fit that keeps its highlight is unchanged.
+HIGHLIGHT_BAND, HIGHLIGHT_WEIGHT = 1.75, 100.0
+
+
+#: The highlight is held at incidences up to this angle (degrees).  Beyond, lobes differ by
+#: construction (Ashikhmin-Shirley's ``1 / max(cos)`` and Schlick's rise make its grazing peak
+#: about 30 times a Blinn lobe's at 80 degrees when both agree at normal incidence), and a
+#: constraint there would pull the highlight off at every other incidence.
+HIGHLIGHT_MAX_THETA = 60.0
+
+
+def highlight_rows(wi, g, max_theta_deg: float = HIGHLIGHT_MAX_THETA) -> np.ndarray:
+    """The highlight of a target: per distinct incidence ``wi`` (rows of an ``(N, 3)`` array)
+    up to ``max_theta_deg`` from the normal, the index of its largest ``g`` (``f cos``; channel
+    mean for colours), the peak of what a point light shows.  Sorted by index."""
+    wi = np.asarray(wi, float).reshape(-1, 3)
+    g = np.asarray(g, float)
+    g = g.mean(axis=-1) if g.ndim == 2 else g
+    _, group = np.unique(np.round(wi, 12), axis=0, return_inverse=True)
+    group = group.reshape(-1)
+    order = np.lexsort((-g, group))
+    first = np.r_[True, group[order][1:] != group[order][:-1]]
+    rows = order[first]
+    cos = wi[rows, 2] / np.linalg.norm(wi[rows], axis=-1)
+    return np.sort(rows[cos >= np.cos(np.radians(max_theta_deg)) - 1e-12])
+
+
+def highlight_ratio(c, g, rows, eps) -> np.ndarray:
+    """``ln((c_k + eps) / (g_k + eps))`` at the highlight ``rows`` (:func:`highlight_rows`)."""
+    return _lr(np.asarray(c)[rows], np.asarray(g)[rows], eps)
+
+
+def highlight_excess(c, g, rows, eps) -> np.ndarray:
+    """The highlight's log ratio beyond the band (:data:`HIGHLIGHT_BAND`), signed, zero inside:
+    ``sign(d) max(0, |d| - ln B)`` with ``d`` of :func:`highlight_ratio`.  The fit adds
+    ``HIGHLIGHT_WEIGHT sum excess^2`` to every metric's figure (least squares: rows
+    ``sqrt(HIGHLIGHT_WEIGHT) excess``)."""
+    d = highlight_ratio(c, g, rows, eps)
+    return np.sign(d) * np.maximum(np.abs(d) - np.log(HIGHLIGHT_BAND), 0.0)
 
 
 def _smooth_max_abs(r, beta):

@@ -148,7 +148,7 @@ def specular_probability(ops, cos_i, rs, rd):
     return lobe_probabilities(ops, cos_i, rs, rd)[0]
 
 
-def lobe_probabilities(ops, cos_i, rs, rd):
+def lobe_probabilities(ops, cos_i, rs, rd, ks=1.0):
     """``(ps, pd) = (Fs, Ad) / (Fs + Ad)``: the probabilities of the specular lobe
     (:func:`specular_probability`) and of the diffuse one, each computed as its
     own quotient.  ``pd`` is not ``1 - ps``: at grazing incidence ``Ad`` is
@@ -157,10 +157,11 @@ def lobe_probabilities(ops, cos_i, rs, rd):
     ``f`` kept it (sample weights of 6e6).  ``(1, 0)`` where ``Fs + Ad == 0``.
     Each is a true quotient, not a product with ``1/(Fs + Ad)``: with ``rs = 0``
     and ``rd = 1e-310`` (float32: ``1e-39``) the sum is subnormal, its reciprocal
-    overflows, and ``0 * inf`` made the pdf NaN."""
+    overflows, and ``0 * inf`` made the pdf NaN.  ``ks``: the specular scale of
+    :class:`AshikhminShirleyScaled` (``Fs = ks F``, ``Ad`` of ``ks rs``; 1: the paper's)."""
     c = ops.maximum(cos_i, 0.0)
-    fs = schlick(ops, c, rs)
-    ad = diffuse_albedo(c, rs, rd)
+    fs = ks * schlick(ops, c, rs)
+    ad = diffuse_albedo(c, ks * rs, rd)
     s = fs + ad
     pos = s > 0
     den = ops.where(pos, s, 1.0)
@@ -291,3 +292,55 @@ class AshikhminShirleyDiffuse(BxDF):
 
     def lobes(self):
         return (DIFFUSE_LOBE,)
+
+
+# -- the form with a separate specular scale ------------------------------------------
+
+KS = Param("ks", 1.0, 0.0, 1.0, "color",
+           "specular scale: the lobe times ks, Schlick's R0 (rs) then only shapes the Fresnel rise "
+           "(ks = 1: the paper's model)", (0.0, 1.0))
+
+
+def scaled(ops, wi, wo, nu, nv, rs, rd, ks):
+    """``ks rho_s(rs) + rho_d(ks rs, rd)``: the specular term (journal eq. 4) times a scale
+    ``ks`` and the diffuse term (eq. 5) under a coating that reflects ``ks rs`` at normal
+    incidence, ``28 rd / (23 pi) (1 - ks rs) (...)(...)``.  ``ks = 1`` is the paper's model.
+    Ngan, Durand & Matusik (2005) fitted this lobe with ``rs`` and a colour scale apart
+    (their published A-S fits: ``rs = 0.999`` times an RGB albedo), which ``rs`` alone, both
+    Fresnel's R0 and the lobe's scale, cannot express.  Energy: the albedo is linear in
+    ``ks``, ``ks S(rs) + rd (1 - ks rs) D``, at most 1 at ``ks = 0`` (the diffuse term alone)
+    and at ``ks = 1`` (the paper's model), so at most 1 between."""
+    return ks * specular(ops, wi, wo, nu, nv, rs) + diffuse(ops, wi, wo, ks * rs, rd)
+
+
+SCALED_SPECULAR_LOBE = Lobe("glossy",
+                            lambda ops, wi, wo, p: p.ks * specular(ops, wi, wo, p.nu, p.nv, p.rs),
+                            SPECULAR_LOBE.pdf, SPECULAR_LOBE.sample)
+SCALED_DIFFUSE_LOBE = Lobe("diffuse",
+                           lambda ops, wi, wo, p: diffuse(ops, wi, wo, p.ks * p.rs, p.rd),
+                           DIFFUSE_LOBE.pdf, DIFFUSE_LOBE.sample,
+                           lambda ops, wi, p: diffuse_albedo(ops.maximum(wi[2], 0.0), p.ks * p.rs, p.rd))
+
+
+@register("ashikhmin-shirley-scaled",
+          "Ashikhmin-Shirley with a separate specular scale ks (Ngan et al. 2005's form): "
+          "ks times the Fresnel-weighted lobe (nu, nv, rs) plus the coupled diffuse term (rd) "
+          "under a coating of R0 ks rs.",
+          references=REFERENCES + ("Ngan, Durand, Matusik, Experimental analysis of BRDF models, EGSR 2005",))
+class AshikhminShirleyScaled(AshikhminShirley):
+    """``AshikhminShirleyScaled(nu, nv, rs, rd, ks)``: :func:`scaled`; sampled as the paper's
+    model with the specular probability ``ks F / (ks F + A_d)``."""
+
+    PARAMS = (NU, NV, RS, RD, KS)
+
+    def spec_probability(self, ops, wi, q):
+        return lobe_probabilities(ops, wi[2], q.rs, q.rd, q.ks)[0]
+
+    def diffuse_probability(self, ops, wi, q):
+        return lobe_probabilities(ops, wi[2], q.rs, q.rd, q.ks)[1]
+
+    def _f(self, ops, wi, wo, p):
+        return scaled(ops, wi, wo, p.nu, p.nv, p.rs, p.rd, p.ks)
+
+    def lobes(self):
+        return (SCALED_SPECULAR_LOBE, SCALED_DIFFUSE_LOBE)
