@@ -658,14 +658,25 @@ def convert_cmd(source, to, out, metric, as_json):
         _echo_json(res.to_json())
         return
     t = Table()
-    for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "warnings"):
+    for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "FLIP", "highlight", "warnings"):
         t.add_column(col)
     for c in res.items:
         diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo)
-        t.add_row(escape(c.name), escape(c.target), f"{c.errors['perceptual']:.3g}", diffs,
+        flip, ratio = _looks_cells(c.looks)
+        t.add_row(escape(c.name), escape(c.target), f"{c.errors['perceptual']:.3g}", diffs, flip, ratio,
                   escape("; ".join(c.warnings)) or "-")
     console.print(t)
+    for c in res.items:     # the image's verdict on stderr too: a warning, not a cell to find
+        for w in (c.looks.warnings if c.looks is not None else ()):
+            click.echo(f"warning: {c.name}: {w}", err=True)
     console.print(f"wrote {escape(str(path))}")
+
+
+def _looks_cells(looks):
+    """The FLIP and highlight-ratio cells of a :class:`plausible.mitsuba.looks.Looks` (``-`` for None)."""
+    if looks is None:
+        return "-", "-"
+    return f"{looks.flip:.3f}", f"x{looks.highlight_ratio:.3g}"
 
 
 @main.command("convert-table")
