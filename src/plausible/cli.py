@@ -609,6 +609,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     for k, v in res.errors.items():
         e.add_row(k, "n/a (no target albedo)" if v is None else f"{v:.6g}")
     console.print(e)
+    _print_looks(res.target.model, res.model, "target")
     if res.timed_out:
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
     for w in caught:
@@ -672,6 +673,25 @@ def convert_cmd(source, to, out, metric, as_json):
     console.print(f"wrote {escape(str(path))}")
 
 
+def _print_looks(source, result, what):
+    """The fit or conversion beside its ``what`` (:func:`plausible.compare_looks`): FLIP and
+    highlight ratios on stdout, a lost or invented highlight as a warning on stderr; a line
+    saying why where there is nothing to render (a table target, no Mitsuba)."""
+    from .mitsuba.looks import compare_looks
+
+    if source is None:
+        console.print(f"looks: not rendered (the {what} is a table, not a BSDF)")
+        return
+    try:
+        looks = compare_looks(source, result)
+    except (ValueError, ImportError) as err:
+        console.print(f"looks: not rendered ({escape(str(err))})", soft_wrap=True)
+        return
+    console.print(f"looks, rendered beside the {what} (plausible.compare_looks): {looks.summary()}", soft_wrap=True)
+    for w in looks.warnings:
+        click.echo(f"warning: {w}", err=True)
+
+
 def _looks_cells(looks):
     """The FLIP and highlight-ratio cells of a :class:`plausible.mitsuba.looks.Looks` (``-`` for None)."""
     if looks is None:
@@ -704,6 +724,8 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
 
     from rich.markup import escape
 
+    from types import SimpleNamespace
+
     from .conversion import table
 
     targets = [t.strip() for t in to.split(",") if t.strip()]
@@ -716,9 +738,12 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo):
         if "error" in r:
             console.print(f"[red]failed[/red] {escape(table.key(r))}: {escape(r['error'])}", soft_wrap=True)
         else:
+            flip, ratio = _looks_cells(SimpleNamespace(**r) if "flip" in r else None)
             console.print(f"{escape(table.key(r))} {r['target']} "
-                          + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" {r['seconds']:.1f} s",
-                          soft_wrap=True)
+                          + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" FLIP {flip} highlight {ratio}"
+                          + f" {r['seconds']:.1f} s", soft_wrap=True)
+            for w in r.get("looks_warnings", ()):
+                click.echo(f"warning: {table.key(r)}: {w}", err=True)
 
     try:
         rows = table.run_table(out, targets, per_set=per_set, fits=fits_, limit=limit, workers=workers,

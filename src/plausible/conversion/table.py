@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TARGETS", "convert_row", "family", "jobs", "key", "markdown", "read_rows", "run_table", "summary"]
+__all__ = ["TARGETS", "agreement", "convert_row", "family", "jobs", "key", "markdown", "read_rows", "run_table", "summary", "target_of"]
 
 #: The targets of the table.
 TARGETS = ("mitsuba", "gltf")
@@ -88,7 +88,50 @@ def convert_row(job) -> dict:
                 l2=c.errors["l2-cos"], log=c.errors["log"], albedo_diff=diffs,
                 source_albedo_max=max(max(v["source"]) for v in c.albedo.values()),
                 conserving=not any("not energy conserving" in w for w in c.warnings),
-                params=c.params, seconds=time.monotonic() - t0, code=code_version())
+                params=c.params, seconds=time.monotonic() - t0, code=code_version(), **_looks_fields(c.looks))
+
+
+def _looks_fields(looks) -> dict:
+    """A row's image scores (:func:`plausible.compare_looks`, source beside target): FLIP, the
+    worst and per-angle highlight ratios, and the looks' warnings (empty within the band)."""
+    if looks is None:
+        return {}
+    return dict(flip=looks.flip, highlight_ratio=looks.highlight_ratio, highlight_ratios=list(looks.highlight_ratios),
+                looks_warnings=list(looks.warnings))
+
+
+def target_of(row):
+    """What a row's target renders as: its Mitsuba dict (``mitsuba``) or the ``gltf-pbr`` model of
+    its parameters (``gltf``)."""
+    if row["to"] == "gltf":
+        from .. import registry
+        from . import GLTF_MODEL
+
+        return registry.make(GLTF_MODEL, **row["params"])
+    return row["params"]
+
+
+def agreement(rows: dict, row) -> dict | None:
+    """``row``'s glTF row of the same material with ``agreement``: the Mitsuba and glTF targets
+    compared with each other (:func:`plausible.compare_looks`, the Mitsuba target the reference;
+    issue 41), once both rows are in ``rows`` with their own image scores; None when there is
+    nothing new."""
+    if row.get("to") not in ("mitsuba", "gltf") or "error" in row:
+        return None
+    pair = {to: rows.get(key((to, row["fit"], row["material"]))) for to in ("mitsuba", "gltf")}
+    if any(r is None or "error" in r or "flip" not in r for r in pair.values()):
+        return None                     # a row missing, failed, or made before the image scores
+    if pair["gltf"].get("agreement", {}).get("mitsuba") == pair["mitsuba"]["params"]:
+        return None                     # already compared with this Mitsuba target
+    from ..mitsuba.looks import compare_looks
+
+    try:
+        looks = compare_looks(target_of(pair["mitsuba"]), target_of(pair["gltf"]))
+    except (ValueError, ImportError) as e:
+        return {**pair["gltf"], "agreement": {"error": str(e), "mitsuba": pair["mitsuba"]["params"]}}
+    return {**pair["gltf"], "agreement": dict(flip=looks.flip, highlight_ratio=looks.highlight_ratio,
+                                              highlight_ratios=list(looks.highlight_ratios),
+                                              mitsuba=pair["mitsuba"]["params"])}
 
 
 def read_rows(path) -> dict:
@@ -157,8 +200,13 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
 
     def finish(row):
         _append(path, row)
+        done[key(row)] = row
         if on_row is not None:
             on_row(row)
+        both = agreement(done, row)         # the glTF row again, with the Mitsuba target beside it
+        if both is not None:
+            _append(path, both)
+            done[key(both)] = both
 
     if workers == 0 or len(todo) <= 1:
         for j in todo:
@@ -190,15 +238,19 @@ def markdown(rows: dict, tolerance: float | None = None) -> str:
 
 def summary(rows, tol) -> list[dict]:
     """Per fit set: conversions, within ``tol`` (of the conserving sources), median
-    perceptual, largest albedo difference, median seconds."""
+    perceptual, largest albedo difference, median seconds; of the rows with image scores,
+    median FLIP and how many have a highlight outside the band (:func:`plausible.compare_looks`)."""
     out = []
     for fit in dict.fromkeys(r["fit"] for r in rows):
         rs = [r for r in rows if r["fit"] == fit]
         cons = [r for r in rs if r["conserving"]]
+        looked = [r for r in rs if "flip" in r]
         out.append(dict(fit=fit, n=len(rs), within=sum(max(r["albedo_diff"]) <= tol for r in cons), conserving=len(cons),
                         perceptual=float(np.median([r["perceptual"] for r in rs])),
                         worst=max(max(r["albedo_diff"]) for r in rs),
-                        seconds=float(np.median([r["seconds"] for r in rs]))))
+                        seconds=float(np.median([r["seconds"] for r in rs])),
+                        looked=len(looked), flip=float(np.median([r["flip"] for r in looked])) if looked else None,
+                        off_band=sum(bool(r["looks_warnings"]) for r in looked)))
     return out
 
 
@@ -212,20 +264,29 @@ def family(row) -> str:
     return name
 
 
+def _cell(v, fmt_=".3f", prefix=""):
+    return "-" if v is None else f"{prefix}{v:{fmt_}}"
+
+
 def _markdown(rows, to, tol) -> str:
     s = summary(rows, tol)
     lines = [f"#### to {to}: summary", "",
              f"| fit set | conversions | within {tol:g} (conserving sources) | median perceptual | "
-             "largest albedo diff. | median seconds |", "|---|---|---|---|---|---|"]
+             "largest albedo diff. | median FLIP | highlight outside the band | median seconds |",
+             "|---|---|---|---|---|---|---|---|"]
     lines += [f"| {r['fit']} | {r['n']} | {r['within']} / {r['conserving']} | {r['perceptual']:.3g} | {r['worst']:.3f} | "
-              f"{r['seconds']:.1f} |" for r in s]
+              f"{_cell(r['flip'])} | {r['off_band']} / {r['looked']} | {r['seconds']:.1f} |" for r in s]
+    pair = to == "gltf"
     lines += ["", f"#### every conversion to {to}", "",
-              f"| fit set | material | target | perceptual | l2-cos | log | albedo diff. 0 / 45 / 75 deg | within {tol:g} | seconds |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              f"| fit set | material | target | perceptual | l2-cos | log | albedo diff. 0 / 45 / 75 deg | within {tol:g} | "
+              "FLIP | highlight | " + ("vs Mitsuba: FLIP / highlight | " if pair else "") + "seconds |",
+              "|---|---|---|---|---|---|---|---|---|---|" + ("---|" if pair else "") + "---|"]
     for r in sorted(rows, key=lambda r: (r["fit"], r["material"])):
         ok = max(r["albedo_diff"]) <= tol
+        agree = r.get("agreement") or {}
+        vs = (f"{_cell(agree.get('flip'))} / {_cell(agree.get('highlight_ratio'), '.3g', 'x')} | " if pair else "")
         lines.append(f"| {r['fit']} | {r['material']} | {family(r)} | {r['perceptual']:.3g} | "
                      f"{r['l2']:.3g} | {r['log']:.3g} | " + " / ".join(f"{d:.3f}" for d in r["albedo_diff"])
                      + f" | {'yes' if ok else ('no' if r['conserving'] else 'no (source not conserving)')} | "
-                     f"{r['seconds']:.1f} |")
+                     f"{_cell(r.get('flip'))} | {_cell(r.get('highlight_ratio'), '.3g', 'x')} | {vs}{r['seconds']:.1f} |")
     return "\n".join(lines) + "\n"
