@@ -315,6 +315,7 @@ def hdr_flip(reference: np.ndarray, test: np.ndarray, mask: np.ndarray | None = 
     ``mask`` (all pixels if None).  FLIP takes its exposure range from the reference; a black
     reference takes it from the test, and two black images give 0."""
     import flip_evaluator
+    from threadpoolctl import threadpool_limits
 
     ref = np.ascontiguousarray(np.maximum(reference, 0.0), dtype=np.float32)
     tst = np.ascontiguousarray(np.maximum(test, 0.0), dtype=np.float32)
@@ -322,7 +323,10 @@ def hdr_flip(reference: np.ndarray, test: np.ndarray, mask: np.ndarray | None = 
         return 0.0
     if not ref.any() or np.ptp(luminance(ref)) == 0.0:
         ref, tst = tst, ref
-    err = flip_evaluator.evaluate(ref, tst, "HDR", applyMagma=False, computeMeanError=False)[0][..., 0]
+    # one OpenMP thread: flip-evaluator's threads spin against Dr.Jit's (and other processes') for
+    # cores; 0.15 s a 64 x 64 view with one, 1-3 s with the default on a shared 2-core machine
+    with threadpool_limits(limits=1, user_api="openmp"):
+        err = flip_evaluator.evaluate(ref, tst, "HDR", applyMagma=False, computeMeanError=False)[0][..., 0]
     return float(np.mean(err[mask] if mask is not None else err))
 
 
