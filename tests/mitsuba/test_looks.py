@@ -122,11 +122,14 @@ def test_a_python_callable_cannot_be_rendered_and_says_so():
 
 
 def test_a_published_fit_by_its_parts_matches_the_plausible_material_plugin():
-    """Two routes to one published fit: its spec, rendered part by part and added, and the
+    """Two routes to one published fit: its parts rendered one by one and added, and the
     plugin ``plausible_material`` (one BSDF, its own lobe mixture): the point-light images
     agree to float32 rounding, the environment's to its noise."""
-    looks = plausible.compare_looks("material:alum-bronze@ngan2005/ward",
-                                    {"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"})
+    fit = plausible.material("alum-bronze", "ngan2005/ward")
+    assert L.mitsuba_parts(fit) == [({"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"}, 1.0)]
+    parts = plausible.Sum(list(zip(fit.parts, fit.scales)), name="parts")     # not named as the fit: by parts
+    assert [d["type"] for d, _ in L.mitsuba_parts(parts)] == ["lambertian", "ward"]
+    looks = plausible.compare_looks(parts, {"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"})
     np.testing.assert_allclose(looks.highlight_ratios, 1.0, rtol=1e-4)
     assert looks.flip < 0.05
 

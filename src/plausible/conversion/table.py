@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TARGETS", "agreement", "convert_row", "family", "jobs", "key", "markdown", "read_rows", "run_table", "summary", "target_of"]
+__all__ = ["ISSUE_CASES", "TARGETS", "agreement", "convert_row", "distribution", "distribution_markdown", "family", "jobs", "key", "markdown", "read_rows", "run_table", "sample", "score_row", "summary", "target_of"]
 
 #: The targets of the table.
 TARGETS = ("mitsuba", "gltf")
@@ -165,16 +165,16 @@ def _append(path, row):
         os.fsync(f.fileno())
 
 
-def _guarded(job):
+def _guarded(job, make_row=None):
     try:
-        return convert_row(job)
+        return (make_row or convert_row)(job)
     except Exception as e:      # a row that fails is recorded, not fatal to the run
         to, fit, name = job
         return dict(to=to, fit=fit, material=name, error=f"{type(e).__name__}: {e}")
 
 
 def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, limit: int | None = None,
-              workers: int = 0, on_row=None, redo=()) -> dict:
+              workers: int = 0, on_row=None, redo=(), todo_jobs=None, make_row=None) -> dict:
     """Convert the :func:`jobs` not yet in ``path`` and append each row as it finishes.
 
     ``workers``: 0 runs them one after another in this process; ``n >= 1`` in ``n``
@@ -182,7 +182,9 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
     ``redo``: targets (``"mitsuba:diffuse"``, ...), fit sets (``"ngan2005/ward"``) or materials
     (``"material:NAME@FIT"``) whose rows made by other code than this (:func:`code_version`) are
     converted again first, in the order of :func:`jobs` (the new row replaces the old one).
-    ``on_row(row)`` is called after each row is written.  Returns every row of ``path``."""
+    ``on_row(row)`` is called after each row is written.  ``todo_jobs``: these jobs instead of
+    :func:`jobs` (e.g. a :func:`sample`); ``make_row(job)``: the row of a job instead of
+    :func:`convert_row` (in this process: ``workers`` 0).  Returns every row of ``path``."""
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
     done = read_rows(path)
@@ -191,9 +193,9 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
         r = done[key(j)]
         return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
 
-    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and wanted(j)
-             and done[key(j)].get("code") != code_version()]
-    todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
+    every = list(todo_jobs) if todo_jobs is not None else jobs(targets, per_set, fits)
+    again = [j for j in every if key(j) in done and wanted(j) and done[key(j)].get("code") != code_version()]
+    todo = again + [j for j in every if key(j) not in done]
     if limit is not None:
         todo = todo[:max(0, int(limit))]
     Path(path).parent.mkdir(parents=True, exist_ok=True)
@@ -208,9 +210,9 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
             _append(path, both)
             done[key(both)] = both
 
-    if workers == 0 or len(todo) <= 1:
+    if workers == 0 or len(todo) <= 1 or make_row is not None:
         for j in todo:
-            finish(_guarded(j))
+            finish(_guarded(j, make_row))
     else:
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -289,4 +291,72 @@ def _markdown(rows, to, tol) -> str:
                      f"{r['l2']:.3g} | {r['log']:.3g} | " + " / ".join(f"{d:.3f}" for d in r["albedo_diff"])
                      + f" | {'yes' if ok else ('no' if r['conserving'] else 'no (source not conserving)')} | "
                      f"{_cell(r.get('flip'))} | {_cell(r.get('highlight_ratio'), '.3g', 'x')} | {vs}{r['seconds']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+# -- the image scores of a sample (issue 40; docs/convert.md, "The look of a conversion") ----------------
+
+#: The conversions issue 40 names, always in a sample: highlights lost to glTF (alum-bronze, nickel),
+#: a red plastic made a red metal, chrome made copper, and the paint whose perceptual fits lost the lobe.
+ISSUE_CASES = (("ngan2005/ward", "alum-bronze"), ("ngan2005/ashikhmin-shirley", "nickel"),
+               ("ngan2005/ashikhmin-shirley", "red-specular-plastic"), ("ngan2005/ward", "chrome"),
+               ("low2012/smooth-e2", "gold-metallic-paint"))
+
+
+def sample(n: int, seed: int = 0, include=ISSUE_CASES, fits=None) -> list[tuple]:
+    """``[(fit, material), ...]``: ``include`` (those loadable), then ``n`` others drawn without
+    replacement by ``random.Random(seed)`` from every (fit set, material) pair of the loadable
+    fit sets (or of ``fits``), sorted, so that one seed draws the same sample on any machine."""
+    import random
+
+    pairs = sorted({(f, m) for _, f, m in jobs(("x",), None, fits)})
+    first = [p for p in include if p in pairs]
+    rest = [p for p in pairs if p not in first]
+    return first + random.Random(int(seed)).sample(rest, min(int(n), len(rest)))
+
+
+def score_row(row) -> dict:
+    """``row`` (a table row with its target's ``params``) with the image scores of its source,
+    ``material:NAME@FIT``, beside its target (:func:`_looks_fields`); a row that has them, or
+    failed, as it is."""
+    if "error" in row or "flip" in row:
+        return row
+    from .. import catalogue
+    from ..mitsuba.looks import compare_looks
+
+    return {**row, **_looks_fields(compare_looks(catalogue.spec(row["material"], row["fit"]), target_of(row)))}
+
+
+def distribution(rows, label: str = "") -> list[dict]:
+    """Per target, over the rows with image scores: how many, FLIP's 10th/50th/90th percentiles and
+    largest, the highlight ratio's smallest, 10th/50th/90th percentiles and largest, how many lost
+    (below the band) or invented (above) a highlight, and how many of those carry the warning;
+    with ``agreement``, the Mitsuba-glTF pairs the same way (FLIP, ratio glTF / Mitsuba)."""
+    from ..mitsuba.looks import HIGHLIGHT_BAND
+
+    lo, hi = HIGHLIGHT_BAND
+    out = []
+    groups = [(to, [r for r in rows if r.get("to") == to and "flip" in r]) for to in TARGETS]
+    groups.append(("mitsuba vs gltf", [r["agreement"] for r in rows if "flip" in r.get("agreement", {})]))
+    for to, rs in groups:
+        if not rs:
+            continue
+        flip = np.array([r["flip"] for r in rs])
+        ratio = np.array([r["highlight_ratio"] for r in rs])
+        warned = sum(bool(r.get("looks_warnings")) for r in rs)
+        out.append(dict(label=label, to=to, n=len(rs), flip=[float(np.percentile(flip, q)) for q in (10, 50, 90)]
+                        + [float(flip.max())], ratio=[float(ratio.min())] + [float(np.percentile(ratio, q))
+                                                                             for q in (10, 50, 90)] + [float(ratio.max())],
+                        lost=int(np.sum(ratio < lo)), invented=int(np.sum(ratio > hi)), warned=warned))
+    return out
+
+
+def distribution_markdown(dist) -> str:
+    """The rows of :func:`distribution` as the table of docs/convert.md (one line per label and target)."""
+    lines = ["| code | target | conversions | FLIP p10 / median / p90 / max | highlight ratio min / p10 / median / "
+             "p90 / max | lost (< 1/1.5) | invented (> 1.5) | warned |", "|---|---|---|---|---|---|---|---|"]
+    for d in dist:
+        lines.append(f"| {d['label']} | {d['to']} | {d['n']} | " + " / ".join(f"{x:.3f}" for x in d["flip"]) + " | "
+                     + " / ".join(f"{x:.3g}" for x in d["ratio"]) + f" | {d['lost']} | {d['invented']} | "
+                     + (f"{d['warned']} |" if d["to"] != "mitsuba vs gltf" else "- |"))
     return "\n".join(lines) + "\n"

@@ -240,8 +240,12 @@ def _check_comparison(ctx, spec):
     same = compare_looks(spec, spec)
     ctx.measure(f"{spec} against itself: FLIP", same.flip, 0.0, 0.0)
     ctx.measure(f"{spec} against itself: largest |log highlight ratio|", abs(math.log(same.highlight_ratio)), 0.0, 0.0)
-    name, fit = spec.split(":", 1)[1].split("@")
-    plugin = compare_looks(spec, {"type": "plausible_material", "name": name, "fit": fit})
+    from plausible import Sum, make
+
+    published = make(spec)
+    parts = Sum(list(zip(published.parts, published.scales)), name="parts")    # not the fit's name: by parts
+    name, fit = published.name.split("@")
+    plugin = compare_looks(parts, {"type": "plausible_material", "name": name, "fit": fit})
     ctx.measure(f"{spec} by its parts against the plausible_material plugin: largest |highlight ratio - 1|",
                 max(abs(r - 1.0) for r in plugin.highlight_ratios), at_most=1e-3,
                 note=f"FLIP {plugin.flip:.3f} (the environment's noise: the two sample their lobes apart)")

@@ -183,6 +183,9 @@ def mitsuba_parts(x) -> list:
     if isinstance(x, Material):
         return [({"type": Material.OWNER, "name": x.params["name"], "fit": x.params["fit"]}, 1.0)]
     if isinstance(x, Sum):
+        fit = _published(x)
+        if fit is not None:     # one plugin for every published fit (its parts need not have one)
+            return [({"type": Material.OWNER, "name": fit[0], "fit": fit[1]}, 1.0)]
         return [(d, _times(s, k)) for part, s in zip(x.parts, x.scales) for d, k in mitsuba_parts(part)]
     if type(x).__name__ == "MerlBRDF":
         return [({"type": "merl", "filename": str(x.source)}, 1.0)]
@@ -196,6 +199,21 @@ def mitsuba_parts(x) -> list:
         return [(x, 1.0)]
     raise ValueError(f"cannot render {type(x).__name__} {x!r:.80} in Mitsuba: give a model, a spec, a published "
                      f"fit or a Mitsuba BSDF (dict or object)")
+
+
+def _published(x):
+    """``(name, fit)`` of a :class:`plausible.Sum` that is a published fit as
+    :func:`plausible.material` builds it (named ``NAME@FIT``, and equal to that fit), else None."""
+    from ..catalogue import fit_sets as F
+
+    name, at, fit = str(getattr(x, "name", "")).partition("@")
+    if not at or name not in F.materials() or fit not in {f.key for f in F.fits() if f.built}:
+        return None
+    ref = F.material(name, fit)
+    same = len(ref.parts) == len(x.parts) and all(
+        repr(a) == repr(b) and np.array_equal(np.asarray(1.0 if s is None else s), np.asarray(1.0 if t is None else t))
+        for a, b, s, t in zip(ref.parts, x.parts, ref.scales, x.scales))
+    return (name, fit) if same else None
 
 
 def _times(a, b):
