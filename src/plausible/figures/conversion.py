@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import catalogue
 from .core import figure
 
 #: The legacy materials (one MTL library): a plastic, a glossy red paint, a metal (``illum 3``).
@@ -161,8 +162,9 @@ def _measure(ctx, m, s, c, thumb, curves, thetas, axes):
 
 #: Published fits of :func:`convert_looks`: a lobe that glTF lost in the issue (0.02x), a dielectric-like
 #: paint, a metal; quick mode: the first.
-LOOK_FITS = ("material:alum-bronze@ngan2005/ward", "material:blue-acrylic@ngan2005/cook-torrance",
-             "material:nickel@ngan2005/ashikhmin-shirley")
+LOOK_FITS = tuple(catalogue.spec(n, f) for n, f in (("alum-bronze", "ngan2005/ward"),
+                                                    ("blue-acrylic", "ngan2005/cook-torrance"),
+                                                    ("nickel", "ngan2005/ashikhmin-shirley")))
 #: The targets, each a column beside the source.
 LOOK_TARGETS = ("mitsuba", "gltf")
 
