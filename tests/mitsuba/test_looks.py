@@ -23,13 +23,11 @@ def test_a_bsdf_against_itself_has_flip_0_and_ratio_1():
 
 
 def test_the_lambertian_plugin_and_mitsubas_diffuse_agree_to_the_noise():
-    """Two implementations of one BRDF (plausible's plugin, Mitsuba's own): the point-light
-    images have no noise but the pixel jitter, so the peaks agree to 1e-3 where the peak is
-    inside the disc; at 150 deg it sits on the limb, in partly covered pixels (2 %).  FLIP is
-    the environment's sampling noise (0.019 measured, 0.024 seed to seed for one BSDF)."""
+    """Two implementations of one BRDF (plausible's plugin, Mitsuba's own), both sampling the
+    cosine-weighted hemisphere: the light images agree to 1e-4 (measured 7e-5), so the peaks
+    to 1e-3; FLIP is the environment's sampling noise (0.019 measured, 0.024 seed to seed)."""
     looks = plausible.compare_looks("lambertian:rd=0.5", DIFFUSE_05)
-    np.testing.assert_allclose(looks.highlight_ratios[:3], 1.0, atol=1e-3)
-    assert abs(looks.highlight_ratios[3] - 1.0) < 0.02
+    np.testing.assert_allclose(looks.highlight_ratios, 1.0, atol=1e-3)
     assert looks.flip < 0.03
     assert looks.ok
 
@@ -44,38 +42,53 @@ def test_a_lambertian_scaled_by_k_has_highlight_ratio_k_and_is_flagged():
     assert [w.split(":")[0] for w in down.warnings] == ["highlight lost"]
 
 
-def _closed_form_peak(model, angle_deg, n=801):
-    """max over the visible, lit sphere of luminance(f(l, v) cos(theta_l) E): the light along +z,
-    the camera at ``angle_deg`` from it, the normals on a fine grid of the visible disc."""
+def _reference_peak(model, angle_deg, res, lamp_points=48):
+    """The light image of the sphere computed apart, in NumPy: at each pixel centre of an
+    orthographic ``res`` x ``res`` view (the camera ``angle_deg`` from the lamp, which is along
+    +z), the normal, and the sum over ``lamp_points`` directions spread over the lamp's cone
+    (equal solid angle, a Fibonacci lattice) of ``f(l, v) cos(theta_l) L dOmega``; then the
+    largest mean over a window of PEAK_WINDOW pixels, as :meth:`Renders.peaks` takes it."""
     a = math.radians(angle_deg)
-    v, light = np.array([math.sin(a), 0.0, math.cos(a)]), np.array([0.0, 0.0, 1.0])
-    x = np.linspace(-1, 1, n)
+    v = np.array([math.sin(a), 0.0, math.cos(a)])
+    x = ((np.arange(res) + 0.5) / res * 2 - 1) * L.HALF_WIDTH
     X, Y = np.meshgrid(x, x)
-    ok = X ** 2 + Y ** 2 < 1
-    X, Y = X[ok], Y[ok]
+    inside = X ** 2 + Y ** 2 < 1
     right = np.cross([0.0, 1.0, 0.0], v)
-    normals = X[:, None] * right + Y[:, None] * np.array([0.0, 1.0, 0.0]) + np.sqrt(1 - X ** 2 - Y ** 2)[:, None] * v
-    t = np.cross(normals, [0.0, 1.0, 0.0])
+    n = (X[inside][:, None] * right + Y[inside][:, None] * np.array([0.0, 1.0, 0.0])
+         + np.sqrt(1 - X[inside] ** 2 - Y[inside] ** 2)[:, None] * v)
+    t = np.cross(n, [0.0, 1.0, 0.0])
     t /= np.linalg.norm(t, axis=1)[:, None]
-    b = np.cross(normals, t)
-    wi = np.stack([t @ light, b @ light, normals @ light], -1)
-    wo = np.stack([t @ v, b @ v, normals @ v], -1)
-    f = np.asarray(model.eval(wi, wo)).reshape(len(wi), -1)
-    val = np.broadcast_to(f * np.maximum(wi[:, 2], 0.0)[:, None] * L.IRRADIANCE, (len(wi), 3))
-    return float(luminance(val).max())
+    b = np.cross(n, t)
+    cos_a = math.cos(math.radians(L.LAMP_DEG))
+    k = np.arange(lamp_points) + 0.5
+    ct = 1 - k / lamp_points * (1 - cos_a)
+    phi = k * math.pi * (3 - math.sqrt(5))
+    lamp = np.stack([np.sqrt(1 - ct ** 2) * np.cos(phi), np.sqrt(1 - ct ** 2) * np.sin(phi), ct], -1)
+    radiance = L.IRRADIANCE / (math.pi * math.sin(math.radians(L.LAMP_DEG)) ** 2)
+    d_omega = 2 * math.pi * (1 - cos_a) / lamp_points
+    wo = np.stack([t @ v, b @ v, n @ v], -1)
+    img = np.zeros((res, res, 3))
+    total = np.zeros((len(n), 3))
+    for light in lamp:
+        wi = np.stack([t @ light, b @ light, n @ light], -1)
+        f = np.asarray(model.eval(wi, wo)).reshape(len(n), -1)
+        total += f * np.maximum(wi[:, 2], 0.0)[:, None] * radiance * d_omega
+    img[inside] = total
+    return L._window_max(luminance(img))
 
 
-def test_the_rendered_peak_is_the_closed_form_max_of_f_cos():
-    """A pixel is the mean radiance over its footprint, so the rendered peak is at most the
-    maximum over the sphere and below it by the lobe's fall-off within half a pixel (128 px:
-    1/61 of the radius): for n = 15, 0.2-0.5 % measured at 0-120 deg; at 150 deg the peak is
-    near the limb, where the edge pixels are partly covered (0.7 % at 256 px, 2 % at 128)."""
+def test_the_rendered_peak_is_the_one_computed_apart_in_numpy():
+    """Mitsuba's path tracer (the model's plugin, emitter and BSDF sampling) against a NumPy sum of
+    f cos over the lamp at each pixel centre (modified-phong n = 15, 128 px): measured 0.1, 0.05
+    and 0.4 % apart at 0, 60, 120 deg (a pixel's footprint against its centre; the lamp 1000 radii
+    away, so its distance changes by 0.2 % over the sphere), asserted within 1 %; at 150 deg the peak
+    is on the limb, whose pixels the sphere covers in part (the centre says all or nothing): 3.6 %,
+    asserted within 5 %."""
     spec = "modified-phong:kd=0.2:ks=0.4:n=15"
     peaks = L.render_looks(spec, res=128).peaks()
-    want = np.array([_closed_form_peak(make_from_spec(spec), a) for a in L.LIGHT_ANGLES])
-    assert np.all(peaks <= want * (1 + 1e-3))
+    want = np.array([_reference_peak(make_from_spec(spec), a, 128) for a in L.LIGHT_ANGLES])
     np.testing.assert_allclose(peaks[:3], want[:3], rtol=0.01)
-    np.testing.assert_allclose(peaks[3], want[3], rtol=0.03)
+    np.testing.assert_allclose(peaks[3], want[3], rtol=0.05)
 
 
 def test_a_sum_is_rendered_as_the_sum_of_its_parts():
@@ -123,14 +136,15 @@ def test_a_python_callable_cannot_be_rendered_and_says_so():
 
 def test_a_published_fit_by_its_parts_matches_the_plausible_material_plugin():
     """Two routes to one published fit: its parts rendered one by one and added, and the
-    plugin ``plausible_material`` (one BSDF, its own lobe mixture): the point-light images
-    agree to float32 rounding, the environment's to its noise."""
+    plugin ``plausible_material`` (one BSDF, its own lobe mixture, so other samples): the
+    highlights agree to the light image's noise (measured 0.8-1.8 %; 2-5 % seed to seed for this
+    fit), the environment's to its noise."""
     fit = plausible.material("alum-bronze", "ngan2005/ward")
     assert L.mitsuba_parts(fit) == [({"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"}, 1.0)]
     parts = plausible.Sum(list(zip(fit.parts, fit.scales)), name="parts")     # not named as the fit: by parts
     assert [d["type"] for d, _ in L.mitsuba_parts(parts)] == ["lambertian", "ward"]
     looks = plausible.compare_looks(parts, {"type": "plausible_material", "name": "alum-bronze", "fit": "ngan2005/ward"})
-    np.testing.assert_allclose(looks.highlight_ratios, 1.0, rtol=1e-4)
+    np.testing.assert_allclose(looks.highlight_ratios, 1.0, rtol=0.05)
     assert looks.flip < 0.05
 
 

