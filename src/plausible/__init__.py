@@ -21,11 +21,12 @@ from .fitting import fit
 from .conversion import convert  # (after fitting: it fits)
 from .catalogue import material, materials
 from .models.sum import Sum
+from .mitsuba.looks import Looks, compare_looks
 from .registry import info, make, names, register
 from .vec import angles, direction
 
 __version__ = "0.1.0"
 
-__all__ = ["BxDF", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "compensate", "convert", "direction", "energy", "fit",
+__all__ = ["BxDF", "Looks", "Sample", "Sum", "albedo", "albedo_curve", "angles", "check", "chi2", "compare_looks", "compensate", "convert", "direction", "energy", "fit",
            "hemispherical_albedo", "info", "make", "material", "materials", "names", "reciprocity", "register",
            "sampling_consistency", "use_backend", "__version__"]

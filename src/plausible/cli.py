@@ -785,6 +785,7 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
     console.print(e)
     for note in res.notes:
         console.print(escape(note), soft_wrap=True)
+    _print_looks(res.target.model, res.model, "target")
     if res.timed_out:
         console.print("[yellow]time limit reached: best point found so far[/yellow]")
     for w in caught:
@@ -846,16 +847,46 @@ def _convert_table(res, path):
         console.print(f"no material converted ({len(res.skipped)} skipped): nothing written")
         return
     t = Table()
-    for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "warnings"):
+    for col in ("material", "target", "perceptual", "albedo diff. 0 / 45 / 75 deg", "FLIP", "highlight", "warnings"):
         t.add_column(col)
     for c in res.items:
         diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo) or "- (not fitted)"
         perceptual = c.errors.get("perceptual")
+        flip, ratio = _looks_cells(c.looks)
         t.add_row(escape(c.name), escape(c.target), "-" if perceptual is None else f"{perceptual:.3g}", diffs,
-                  escape("; ".join(c.warnings)) or "-")
+                  flip, ratio, escape("; ".join(c.warnings)) or "-")
     console.print(t)
+    for c in res.items:     # the image's verdict on stderr too: a warning, not a cell to find
+        for w in (c.looks.warnings if c.looks is not None else ()):
+            click.echo(f"warning: {c.name}: {w}", err=True)
     if path is not None:
         console.print(f"wrote {escape(str(path))}")
+
+
+def _print_looks(source, result, what):
+    """The fit or conversion beside its ``what`` (:func:`plausible.compare_looks`): FLIP and
+    highlight ratios on stdout, a lost or invented highlight as a warning on stderr; a line
+    saying why where there is nothing to render (a table target, no Mitsuba)."""
+    from .mitsuba.looks import compare_looks
+
+    if source is None:
+        console.print(f"looks: not rendered (the {what} is a table, not a BSDF)")
+        return
+    try:
+        looks = compare_looks(source, result)
+    except (ValueError, ImportError) as err:
+        console.print(f"looks: not rendered ({escape(str(err))})", soft_wrap=True)
+        return
+    console.print(f"looks, rendered beside the {what} (plausible.compare_looks): {looks.summary()}", soft_wrap=True)
+    for w in looks.warnings:
+        click.echo(f"warning: {w}", err=True)
+
+
+def _looks_cells(looks):
+    """The FLIP and highlight-ratio cells of a :class:`plausible.mitsuba.looks.Looks` (``-`` for None)."""
+    if looks is None:
+        return "-", "-"
+    return f"{looks.flip:.3f}", f"x{looks.highlight_ratio:.3g}"
 
 
 @main.command("convert-table")
@@ -885,6 +916,8 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, schedule
 
     from rich.markup import escape
 
+    from types import SimpleNamespace
+
     from .conversion import table
 
     _no_stdout(out, "convert-table appends its rows to a file as they finish")
@@ -906,9 +939,12 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, schedule
         if "error" in r:
             console.print(f"[red]failed[/red] {escape(table.key(r))}: {escape(r['error'])}", soft_wrap=True)
         else:
+            flip, ratio = _looks_cells(SimpleNamespace(**r) if "flip" in r else None)
             console.print(f"{escape(table.key(r))} {r['target']} "
-                          + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" {r['seconds']:.1f} s",
-                          soft_wrap=True)
+                          + " / ".join(f"{d:.3f}" for d in r["albedo_diff"]) + f" FLIP {flip} highlight {ratio}"
+                          + f" {r['seconds']:.1f} s", soft_wrap=True)
+            for w in r.get("looks_warnings", ()):
+                click.echo(f"warning: {table.key(r)}: {w}", err=True)
 
     problems, runs = [], []
     try:

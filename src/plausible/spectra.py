@@ -160,3 +160,18 @@ def metal_rgb(metal: str, cos_theta=1.0, illuminant: str = "D65"):
     w = np.clip(wl, lo, hi)
     r = metal_reflectance(metal, w, cos_theta)
     return xyz_to_linear_srgb(spectrum_to_xyz(wl, r, illuminant))
+
+
+#: Rec. 709 (sRGB) luminance of linear RGB: the Y row of :func:`_rgb_to_xyz_matrix`, rounded as
+#: ITU-R BT.709-6 item 3.2 writes it.
+LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)
+
+
+def luminance(img) -> np.ndarray:
+    """Rec. 709 luminance of linear RGB (last axis; a single channel, or a 2-D array, is its own)."""
+    img = np.asarray(img, dtype=np.float64)
+    if img.ndim == 2:
+        return img
+    if img.shape[-1] == 1:
+        return img[..., 0]
+    return img[..., :3] @ np.array(LUMINANCE_WEIGHTS)

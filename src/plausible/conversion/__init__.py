@@ -108,11 +108,17 @@ class Converted:
     #: Textures to bake into a Mitsuba result (``Kd x map_Kd``): dotted slot -> (statement, the fitted
     #: constant colour the texture multiplies); :meth:`Conversion.write` bakes them beside the output.
     bakes: dict = field(default_factory=dict)
+    #: Source and target rendered side by side (:func:`plausible.compare_looks`: FLIP, highlight
+    #: ratios); None where they were not rendered (``looks=False``, or a note says why).
+    looks: object = None
+    #: A Mitsuba target as fitted, before textures replaced its colours (what :attr:`looks` renders).
+    fitted: dict | None = None
 
     def to_dict(self) -> dict:
         return {"name": self.name, "source": self.source, "target": self.target, "params": self.params,
                 "error": self.errors, "albedo": self.albedo, "warnings": self.warnings, "notes": self.notes,
-                "textures": self.textures, "surface": self.surface}
+                "textures": self.textures, "surface": self.surface,
+                "looks": self.looks.to_dict() if self.looks is not None else None}
 
 
 @dataclass
@@ -357,7 +363,8 @@ def _conserving(src, src_alb):
     return []
 
 
-def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: int = 2) -> Conversion:
+def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: int = 2,
+            looks: bool = True) -> Conversion:
     """Convert every material of ``source`` to ``to`` under ``metric`` (module docstring).
 
     ``to``: ``"mitsuba"``, ``"mitsuba:TYPE"`` (``diffuse``, ``roughconductor``,
@@ -365,7 +372,9 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     registered model's name.
     ``metric``: one of :data:`plausible.fitting.metrics.METRICS` (the perceptual
     metric, default, fits lobe and albedo together).  ``starts``: optimiser
-    starts of a registered-model fit.  Returns a :class:`Conversion`.
+    starts of a registered-model fit.  ``looks``: render source and target side by side
+    (:func:`plausible.compare_looks`, about a second a material) into :attr:`Converted.looks`, a
+    warning where a highlight is lost or invented.  Returns a :class:`Conversion`.
     """
     from ..fitting import metrics as M
     from . import mitsuba as CM
@@ -405,6 +414,8 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
                 c = _to_mitsuba(src, family, metric, src_alb, warn)
             else:
                 c = _to_model(src, to, metric, starts, src_alb, warn)
+            if looks:
+                _add_looks(c, src.model)
             items.append(_with_surface(c, src, to))
     return Conversion(to, metric, items, skipped)
 
@@ -484,6 +495,20 @@ def _colour(c) -> str:
     return " ".join(f"{float(x):g}" for x in c)
 
 
+def _add_looks(c, source_model):
+    """``c.looks``: the source and the fitted target (its constant colours: the fit's; textures
+    aside) rendered side by side, the looks' warnings added to ``c.warnings``; a note instead
+    where either cannot be rendered (no Mitsuba, a Python callable)."""
+    from ..mitsuba.looks import compare_looks
+
+    try:
+        c.looks = compare_looks(source_model, c.fitted if c.fitted is not None else c.result)
+    except (ValueError, ImportError) as e:
+        c.notes.append(f"looks not rendered: {e}")
+        return
+    c.warnings.extend(c.looks.warnings)
+
+
 def _to_mitsuba(src, family, metric, src_alb, warn):
     from . import mitsuba as CM
 
@@ -521,7 +546,7 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
         return Converted(src.name, src.spec, "gltf", CM.model_params(d), r.errors, alb, warn, notes, textures,
                          model, src.folder)
     return Converted(src.name, src.spec, f"mitsuba:{r.family}", d, r.errors, alb, warn, notes, textures, d,
-                     src.folder, bakes=bakes)
+                     src.folder, bakes=bakes, fitted=r.dict)
 
 
 def _choose(src, metric, probe, target, src_alb, notes):

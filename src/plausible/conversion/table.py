@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TARGETS", "convert_row", "family", "jobs", "key", "markdown", "read_rows", "run_table", "summary"]
+__all__ = ["ISSUE_CASES", "TARGETS", "agreement", "convert_row", "distribution", "distribution_markdown", "family", "jobs", "key", "markdown", "read_rows", "run_table", "sample", "score_row", "summary", "target_of"]
 
 #: The targets of the table.
 TARGETS = ("mitsuba", "gltf")
@@ -90,7 +90,50 @@ def convert_row(job) -> dict:
                 l2=c.errors["l2-cos"], log=c.errors["log"], albedo_diff=diffs,
                 source_albedo_max=max(max(v["source"]) for v in c.albedo.values()),
                 conserving=not any("not energy conserving" in w for w in c.warnings),
-                params=c.params, seconds=time.monotonic() - t0, code=code_version())
+                params=c.params, seconds=time.monotonic() - t0, code=code_version(), **_looks_fields(c.looks))
+
+
+def _looks_fields(looks) -> dict:
+    """A row's image scores (:func:`plausible.compare_looks`, source beside target): FLIP, the
+    worst and per-angle highlight ratios, and the looks' warnings (empty within the band)."""
+    if looks is None:
+        return {}
+    return dict(flip=looks.flip, highlight_ratio=looks.highlight_ratio, highlight_ratios=list(looks.highlight_ratios),
+                looks_warnings=list(looks.warnings))
+
+
+def target_of(row):
+    """What a row's target renders as: its Mitsuba dict (``mitsuba``) or the ``gltf-pbr`` model of
+    its parameters (``gltf``)."""
+    if row["to"] == "gltf":
+        from .. import registry
+        from . import GLTF_MODEL
+
+        return registry.make(GLTF_MODEL, **row["params"])
+    return row["params"]
+
+
+def agreement(rows: dict, row) -> dict | None:
+    """``row``'s glTF row of the same material with ``agreement``: the Mitsuba and glTF targets
+    compared with each other (:func:`plausible.compare_looks`, the Mitsuba target the reference;
+    issue 41), once both rows are in ``rows`` with their own image scores; None when there is
+    nothing new."""
+    if row.get("to") not in ("mitsuba", "gltf") or "error" in row:
+        return None
+    pair = {to: rows.get(key((to, row["fit"], row["material"]))) for to in ("mitsuba", "gltf")}
+    if any(r is None or "error" in r or "flip" not in r for r in pair.values()):
+        return None                     # a row missing, failed, or made before the image scores
+    if pair["gltf"].get("agreement", {}).get("mitsuba") == pair["mitsuba"]["params"]:
+        return None                     # already compared with this Mitsuba target
+    from ..mitsuba.looks import compare_looks
+
+    try:
+        looks = compare_looks(target_of(pair["mitsuba"]), target_of(pair["gltf"]))
+    except (ValueError, ImportError) as e:
+        return {**pair["gltf"], "agreement": {"error": str(e), "mitsuba": pair["mitsuba"]["params"]}}
+    return {**pair["gltf"], "agreement": dict(flip=looks.flip, highlight_ratio=looks.highlight_ratio,
+                                              highlight_ratios=list(looks.highlight_ratios),
+                                              mitsuba=pair["mitsuba"]["params"])}
 
 
 def read_rows(path, problems: list | None = None) -> dict:
@@ -166,7 +209,8 @@ def _error_row(job, e) -> dict:
 
 def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, limit: int | None = None,
               workers: int = 0, on_row=None, redo=(), scheduler: str | None = None, row=None,
-              problems: list | None = None, summary: list | None = None) -> dict:
+              problems: list | None = None, summary: list | None = None, todo_jobs=None,
+              make_row=None) -> dict:
     """Convert the :func:`jobs` not yet in ``path`` and append each row as it finishes.
 
     The batch engine (:func:`plausible.engine.run`) runs them: ``workers``: 0 one after
@@ -179,8 +223,10 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
     ``redo``: targets (``"mitsuba:diffuse"``, ...), fit sets (``"ngan2005/ward"``) or materials
     (``"material:NAME@FIT"``) whose rows made by other code than this (:func:`code_version`) are
     converted again first, in the order of :func:`jobs` (the new row replaces the old one).
-    ``row(job)``: the row of a job (default :func:`convert_row`; with workers or a scheduler,
-    a module-level function).  ``on_row(row)`` is called after each row is written.
+    ``row(job)`` (or ``make_row``): the row of a job (default :func:`convert_row`; with workers or a
+    scheduler, a module-level function).  ``todo_jobs``: these jobs instead of :func:`jobs` (e.g. a
+    :func:`sample`).  A glTF row whose material's Mitsuba row is written too is appended again with
+    ``agreement`` (:func:`agreement`: the two targets rendered side by side).  ``on_row(row)`` is called after each row is written.
     ``problems``: duplicated rows are listed here (:func:`read_rows`); ``summary``: the
     engine's :class:`~plausible.engine.RunSummary` is appended to it.  Returns every row of
     ``path``."""
@@ -188,6 +234,7 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
 
     from .. import engine
 
+    row = row or make_row
     if workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
     seen = _Rows(path)
@@ -198,9 +245,9 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
         r = done[key(j)]
         return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
 
-    again = [j for j in jobs(targets, per_set, fits) if key(j) in done and wanted(j)
-             and done[key(j)].get("code") != code_version()]
-    todo = again + [j for j in jobs(targets, per_set, fits) if key(j) not in done]
+    every = list(todo_jobs) if todo_jobs is not None else jobs(targets, per_set, fits)
+    again = [j for j in every if key(j) in done and wanted(j) and done[key(j)].get("code") != code_version()]
+    todo = again + [j for j in every if key(j) not in done]
     if limit is not None:
         todo = todo[:max(0, int(limit))]
     stored = []
@@ -215,6 +262,9 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
         stored.append(key(r))
         if on_row is not None:
             on_row(r)
+        both = agreement(seen.update(), r)      # the glTF row again, with the Mitsuba target beside it
+        if both is not None:
+            engine.append_line(path, json.dumps(both))
 
     def written(job):
         r = seen.update().get(key(job))
@@ -259,15 +309,19 @@ def markdown(rows: dict, tolerance: float | None = None) -> str:
 
 def summary(rows, tol) -> list[dict]:
     """Per fit set: conversions, within ``tol`` (of the conserving sources), median
-    perceptual, largest albedo difference, median seconds."""
+    perceptual, largest albedo difference, median seconds; of the rows with image scores,
+    median FLIP and how many have a highlight outside the band (:func:`plausible.compare_looks`)."""
     out = []
     for fit in dict.fromkeys(r["fit"] for r in rows):
         rs = [r for r in rows if r["fit"] == fit]
         cons = [r for r in rs if r["conserving"]]
+        looked = [r for r in rs if "flip" in r]
         out.append(dict(fit=fit, n=len(rs), within=sum(max(r["albedo_diff"]) <= tol for r in cons), conserving=len(cons),
                         perceptual=float(np.median([r["perceptual"] for r in rs])),
                         worst=max(max(r["albedo_diff"]) for r in rs),
-                        seconds=float(np.median([r["seconds"] for r in rs]))))
+                        seconds=float(np.median([r["seconds"] for r in rs])),
+                        looked=len(looked), flip=float(np.median([r["flip"] for r in looked])) if looked else None,
+                        off_band=sum(bool(r["looks_warnings"]) for r in looked)))
     return out
 
 
@@ -281,20 +335,97 @@ def family(row) -> str:
     return name
 
 
+def _cell(v, fmt_=".3f", prefix=""):
+    return "-" if v is None else f"{prefix}{v:{fmt_}}"
+
+
 def _markdown(rows, to, tol) -> str:
     s = summary(rows, tol)
     lines = [f"#### to {to}: summary", "",
              f"| fit set | conversions | within {tol:g} (conserving sources) | median perceptual | "
-             "largest albedo diff. | median seconds |", "|---|---|---|---|---|---|"]
+             "largest albedo diff. | median FLIP | highlight outside the band | median seconds |",
+             "|---|---|---|---|---|---|---|---|"]
     lines += [f"| {r['fit']} | {r['n']} | {r['within']} / {r['conserving']} | {r['perceptual']:.3g} | {r['worst']:.3f} | "
-              f"{r['seconds']:.1f} |" for r in s]
+              f"{_cell(r['flip'])} | {r['off_band']} / {r['looked']} | {r['seconds']:.1f} |" for r in s]
+    pair = to == "gltf"
     lines += ["", f"#### every conversion to {to}", "",
-              f"| fit set | material | target | perceptual | l2-cos | log | albedo diff. 0 / 45 / 75 deg | within {tol:g} | seconds |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              f"| fit set | material | target | perceptual | l2-cos | log | albedo diff. 0 / 45 / 75 deg | within {tol:g} | "
+              "FLIP | highlight | " + ("vs Mitsuba: FLIP / highlight | " if pair else "") + "seconds |",
+              "|---|---|---|---|---|---|---|---|---|---|" + ("---|" if pair else "") + "---|"]
     for r in sorted(rows, key=lambda r: (r["fit"], r["material"])):
         ok = max(r["albedo_diff"]) <= tol
+        agree = r.get("agreement") or {}
+        vs = (f"{_cell(agree.get('flip'))} / {_cell(agree.get('highlight_ratio'), '.3g', 'x')} | " if pair else "")
         lines.append(f"| {r['fit']} | {r['material']} | {family(r)} | {r['perceptual']:.3g} | "
                      f"{r['l2']:.3g} | {r['log']:.3g} | " + " / ".join(f"{d:.3f}" for d in r["albedo_diff"])
                      + f" | {'yes' if ok else ('no' if r['conserving'] else 'no (source not conserving)')} | "
-                     f"{r['seconds']:.1f} |")
+                     f"{_cell(r.get('flip'))} | {_cell(r.get('highlight_ratio'), '.3g', 'x')} | {vs}{r['seconds']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+# -- the image scores of a sample (issue 40; docs/convert.md, "The look of a conversion") ----------------
+
+#: The conversions issue 40 names, always in a sample: highlights lost to glTF (alum-bronze, nickel),
+#: a red plastic made a red metal, chrome made copper, and the paint whose perceptual fits lost the lobe.
+ISSUE_CASES = (("ngan2005/ward", "alum-bronze"), ("ngan2005/ashikhmin-shirley", "nickel"),
+               ("ngan2005/ashikhmin-shirley", "red-specular-plastic"), ("ngan2005/ward", "chrome"),
+               ("low2012/smooth-e2", "gold-metallic-paint"))
+
+
+def sample(n: int, seed: int = 0, include=ISSUE_CASES, fits=None) -> list[tuple]:
+    """``[(fit, material), ...]``: ``include`` (those loadable), then ``n`` others drawn without
+    replacement by ``random.Random(seed)`` from every (fit set, material) pair of the loadable
+    fit sets (or of ``fits``), sorted, so that one seed draws the same sample on any machine."""
+    import random
+
+    pairs = sorted({(f, m) for _, f, m in jobs(("x",), None, fits)})
+    first = [p for p in include if p in pairs]
+    rest = [p for p in pairs if p not in first]
+    return first + random.Random(int(seed)).sample(rest, min(int(n), len(rest)))
+
+
+def score_row(row) -> dict:
+    """``row`` (a table row with its target's ``params``) with the image scores of its source,
+    ``material:NAME@FIT``, beside its target (:func:`_looks_fields`); a row that has them, or
+    failed, as it is."""
+    if "error" in row or "flip" in row:
+        return row
+    from .. import catalogue
+    from ..mitsuba.looks import compare_looks
+
+    return {**row, **_looks_fields(compare_looks(catalogue.spec(row["material"], row["fit"]), target_of(row)))}
+
+
+def distribution(rows, label: str = "") -> list[dict]:
+    """Per target, over the rows with image scores: how many, FLIP's 10th/50th/90th percentiles and
+    largest, the highlight ratio's smallest, 10th/50th/90th percentiles and largest, how many lost
+    (below the band) or invented (above) a highlight, and how many of those carry the warning;
+    with ``agreement``, the Mitsuba-glTF pairs the same way (FLIP, ratio glTF / Mitsuba)."""
+    from ..mitsuba.looks import HIGHLIGHT_BAND
+
+    lo, hi = HIGHLIGHT_BAND
+    out = []
+    groups = [(to, [r for r in rows if r.get("to") == to and "flip" in r]) for to in TARGETS]
+    groups.append(("mitsuba vs gltf", [r["agreement"] for r in rows if "flip" in r.get("agreement", {})]))
+    for to, rs in groups:
+        if not rs:
+            continue
+        flip = np.array([r["flip"] for r in rs])
+        ratio = np.array([r["highlight_ratio"] for r in rs])
+        warned = sum(bool(r.get("looks_warnings")) for r in rs)
+        out.append(dict(label=label, to=to, n=len(rs), flip=[float(np.percentile(flip, q)) for q in (10, 50, 90)]
+                        + [float(flip.max())], ratio=[float(ratio.min())] + [float(np.percentile(ratio, q))
+                                                                             for q in (10, 50, 90)] + [float(ratio.max())],
+                        lost=int(np.sum(ratio < lo)), invented=int(np.sum(ratio > hi)), warned=warned))
+    return out
+
+
+def distribution_markdown(dist) -> str:
+    """The rows of :func:`distribution` as the table of docs/convert.md (one line per label and target)."""
+    lines = ["| code | target | conversions | FLIP p10 / median / p90 / max | highlight ratio min / p10 / median / "
+             "p90 / max | lost (< 1/1.5) | invented (> 1.5) | warned |", "|---|---|---|---|---|---|---|---|"]
+    for d in dist:
+        lines.append(f"| {d['label']} | {d['to']} | {d['n']} | " + " / ".join(f"{x:.3f}" for x in d["flip"]) + " | "
+                     + " / ".join(f"{x:.3g}" for x in d["ratio"]) + f" | {d['lost']} | {d['invented']} | "
+                     + (f"{d['warned']} |" if d["to"] != "mitsuba vs gltf" else "- |"))
     return "\n".join(lines) + "\n"

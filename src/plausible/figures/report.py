@@ -247,7 +247,7 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
 #: previous run in the output folder take precedence.
 EXPECTED_SECONDS = {"checks": 19.1, "materials-check": 14.3, "compensation": 13.4, "notes-cornell": 11.9,
                     "materials-atlas": 11.6, "neumann-fig8": 11.2, "as-red-spheres": 9, "as-gold": 8.6,
-                    "as-three-views": 8.5, "convert-legacy": 5.8, "as-lambert-vs-as": 5.5, "as-cylinder": 5.5,
+                    "as-three-views": 8.5, "convert-looks": 30.0, "convert-legacy": 5.8, "as-lambert-vs-as": 5.5, "as-cylinder": 5.5,
                     "neumann-fig1": 4.5, "mitsuba-builtins": 4.4, "as-furnace": 4.1, "neumann-fig5": 4,
                     "as-half-sphere": 3.2, "as-convergence": 3.1, "neumann-fig6": 2.7, "neumann-fig4": 2.5,
                     "neumann-fig3": 2.3, "neumann-perceptual": 1.8, "lobe-kulla-conty": 1.5}

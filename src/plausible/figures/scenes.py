@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..spectra import luminance  # noqa: F401 - figures call it as scenes.luminance
+
 #: The kinds of Mitsuba variant the figures render with; the device is
 #: :func:`plausible.mitsuba.variant.preferred`'s (CUDA where a GPU is found, else LLVM;
 #: ``plausible figures --variant``).
@@ -314,16 +316,6 @@ def mosaic(imgs, rows: int, cols: int) -> np.ndarray:
 #: An isolated hot pixel (a firefly): luminance above ``HOT_FACTOR`` x the median of
 #: its 3x3 neighbourhood + ``HOT_OFFSET``.
 HOT_FACTOR, HOT_OFFSET = 4.0, 0.5
-
-
-def luminance(img: np.ndarray) -> np.ndarray:
-    """Rec. 709 luminance of linear RGB (a single channel is its own luminance)."""
-    img = np.asarray(img, dtype=np.float64)
-    if img.ndim == 2:
-        return img
-    if img.shape[-1] == 1:
-        return img[..., 0]
-    return img[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
 
 
 def median3(img: np.ndarray) -> np.ndarray:
