@@ -333,3 +333,26 @@ def test_ns_0_reads_as_0_375_ks_with_blinns_g_against_one_half_without_it():
     a_no_g = np.asarray(plausible.albedo_curve(no_g, thetas_deg=[0, 75]).value, float).reshape(2, -1)[:, 0]
     assert a_no_g[0] == pytest.approx(0.5, abs=1e-4) and a_read[0] == pytest.approx(0.375, abs=1e-3)
     assert a_no_g[1] > 1.5 and a_read[1] < 1.0
+
+
+def test_the_image_error_decides_the_metallic_where_it_can_be_rendered(monkeypatch):
+    """With image scores at hand the fraction is judged by them (issue 41: 'a fractional metallic only
+    where it lowers the image error by a stated margin'), not by the figure minimised: a figure 50 %
+    lower with an image error only 5 % lower gives the better end."""
+    import plausible.conversion as C
+
+    fake_fig = {0.0: 3.0, 1.0: 1.0}
+    flips = {0.3: 0.19, 0.0: 0.40, 1.0: 0.20}
+
+    def fit_family(model, fam, metric, probe=None, target=None, hard=False):
+        v = dict(fam.fixed)["metallic"]
+        return CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": v}, {}, {}, {}, 0, fake_fig[v], "gltf-pbr")
+
+    monkeypatch.setattr(CM, "fit_family", fit_family)
+    monkeypatch.setattr(C, "_image_error", lambda model, r: flips[r.dict["metallic"]])
+    r = CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": 0.3}, {"metallic": 0.3}, {}, {}, 0, 0.5, "gltf-pbr")
+    notes = []
+    assert C.metallic_decision("source", r, "perceptual", None, None, notes).dict["metallic"] == 1.0
+    assert "image error" in notes[0]
+    flips[0.3] = 0.10                   # half the better end's: the fraction is kept
+    assert C.metallic_decision("source", r, "perceptual", None, None, []).dict["metallic"] == 0.3

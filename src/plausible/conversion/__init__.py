@@ -604,16 +604,34 @@ def _exact_diffuse(rd, family, metric, probe, target):
     return CM.measure(d, family, probe, target, metric)
 
 
-#: A fractional glTF metallic is kept only where it lowers the figure minimised by this fraction
-#: against the better of metallic 0 and 1 (each fitted with metallic fixed); else that end.  The hook
-#: of the image-space score (issue 40): :func:`metallic_decision` compares ``figure``.
+#: A fractional glTF metallic is kept only where it lowers the image error (HDR-FLIP of the candidate
+#: rendered beside the source, :func:`plausible.compare_looks`) by this fraction against the better of
+#: metallic 0 and 1 (each fitted with metallic fixed); else that end.  Where nothing can be rendered
+#: (no Mitsuba), the figure minimised decides with the same margin.
 METALLIC_MARGIN = 0.10
 
 
+def _image_error(model, r):
+    """HDR-FLIP of the glTF candidate ``r`` rendered beside ``model`` (:func:`plausible.compare_looks`);
+    None where either cannot be rendered."""
+    if model is None:
+        return None
+    from .. import registry
+    from . import mitsuba as CM
+
+    try:
+        from ..mitsuba.looks import compare_looks
+
+        return float(compare_looks(model, registry.make(GLTF_MODEL, **CM.model_params(r.dict))).flip)
+    except (ValueError, ImportError, TypeError):
+        return None
+
+
 def metallic_decision(model, r, metric, probe, target, notes, margin: float = METALLIC_MARGIN):
-    """The glTF fit ``r`` if its metallic is 0 or 1, or a fractional one lowers the figure by
-    ``margin`` (a fraction) against the better end refitted with metallic fixed; else that end.
-    (A fractional metallic mixes a metal into a dielectric: a red plastic becomes a red metal.)"""
+    """The glTF fit ``r`` if its metallic is 0 or 1, or a fractional one lowers the image error
+    (:func:`_image_error`; the figure minimised where nothing renders) by ``margin`` (a fraction)
+    against the better end refitted with metallic fixed; else that end.  (A fractional metallic
+    mixes a metal into a dielectric: a red plastic becomes a red metal.)"""
     from . import mitsuba as CM
 
     m = float(r.point.get("metallic", r.dict.get("metallic", 0.0)))
@@ -621,10 +639,15 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
         return r
     ends = [CM.fit_family(model, CM.gltf_fixed_metallic(v), metric, probe=probe, target=target, hard=r.hard)
             for v in (0.0, 1.0)]
-    e = min(ends, key=lambda x: x.figure)
-    said = (f"figure minimised {r.figure:.3g} at the fitted metallic {m:.3g}, {e.figure:.3g} at metallic "
-            f"{e.dict['metallic']:g}")
-    if r.figure <= (1.0 - margin) * e.figure:
+    scores = [_image_error(model, x) for x in [r] + ends]
+    if all(x is not None for x in scores):
+        what, (sr, *se) = "image error (HDR-FLIP beside the source)", scores
+    else:
+        what, sr, se = "figure minimised", r.figure, [x.figure for x in ends]
+    k = int(np.argmin(se))
+    e = ends[k]
+    said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}, {se[k]:.3g} at metallic {e.dict['metallic']:g}"
+    if sr <= (1.0 - margin) * se[k]:
         notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower)")
         return r
     notes.append(f"metallic {e.dict['metallic']:g}: {said} (a fractional metallic is kept only where it is more "
