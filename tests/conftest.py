@@ -59,6 +59,8 @@ def full_disk(tmp_path):
     finally:
         subprocess.run(["umount", "-l", str(root)], capture_output=True)
 
+
+@pytest.fixture
 def disk_full_at(monkeypatch):
     """``disk_full_at(name)``: from now on, opening a file whose path holds ``name`` through
     :mod:`plausible.text`'s writers fails with ENOSPC (a disk that fills at that file)."""

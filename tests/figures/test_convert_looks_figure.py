@@ -29,7 +29,9 @@ def test_the_warning_check_holds_for_the_conversion_and_fails_without_its_warnin
     silent = dataclasses.replace(gltf, warnings=[w for w in gltf.warnings if not w.startswith("highlight ")])
     F._check_looks(ctx, SPEC, silent)
     held, broken = ctx.measurements
-    assert gltf.looks.highlight_ratio < 0.05          # the issue's 0.02x: out of the band, warned
+    lo, hi = gltf.looks.band
+    # out of the band, warned (the issue's 0.02x before issue 40's fitter; since then too bright at grazing)
+    assert not lo <= gltf.looks.highlight_ratio <= hi
     assert held["ok"] is True and broken["ok"] is False
 
 

@@ -171,7 +171,7 @@ def test_ward_alpha_is_isotropic_roughness():
 
 @pytest.mark.parametrize("plugin,name,choices", [
     ("neumann_metal", "fresnel", "{none, schlick, conductor}"),
-    ("pumped_up", "correction", "{max, controlled, controlled-product}"),
+    ("pumped_up", "correction", "{max, controlled, controlled-product, controlled-stepwise}"),
 ])
 def test_a_texture_on_a_choice_parameter_is_refused_in_one_line(plugin, name, choices):
     """A texture where a choice is expected: the message's last line (what Mitsuba shows)

@@ -28,14 +28,14 @@ GOLD_FALLBACK = (1.0, 0.71, 0.29)
 
 
 def mitsuba(kind: str = RGB):
-    """Set the Mitsuba variant of ``kind`` (:data:`RGB` or :data:`SPECTRAL`) on the device in
+    """Set the Mitsuba variant of ``kind`` (:data:`RGB` or :data:`SPECTRAL`, or a full variant name) on the device in
     force (:func:`plausible.mitsuba.variant.preferred`), register plausible's plugins, return ``mi``."""
     import mitsuba as mi
 
     import plausible.mitsuba as pm
     from plausible.mitsuba.variant import preferred
 
-    pm.register(preferred(kind))
+    pm.register(kind if "_" in kind else preferred(kind))     # a full variant name (a figure restoring one) as it is
     return mi
 
 

@@ -899,7 +899,8 @@ def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
         the dict of :func:`plausible.fitting.metrics.errors`: ``l2-cos``,
         ``log``, ``perceptual``, ``fcos_max`` (``E_f``) and ``albedo_max``
         (``E_a``; None, and ``perceptual`` the ``fcos`` figure alone, when the
-        target has no albedo);
+        target has no albedo), and ``highlight`` (how far the fit's brightest value per
+        incidence lies outside the band around the target's, in log units: 0 within it);
     ``"albedo"``
         the model's directional albedo at the target's ``thetas`` (an array,
         channel-averaged to the target's shape), or None without a target albedo.
