@@ -30,6 +30,8 @@ or the mean over samples *and* channels).
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 METRICS = ("perceptual", "l2-cos", "log")
@@ -107,6 +109,18 @@ def errors(c, g, a=None, A=None, eps=None, combine: str = "sum", rows=None) -> d
 #: in what the fit minimises (:func:`highlight_excess`): a constraint the fit meets wherever the
 #: model can, and no cost at all inside the band, so a fit that keeps its highlight is unchanged.
 HIGHLIGHT_BAND, HIGHLIGHT_WEIGHT = 1.75, 100.0
+
+
+@contextlib.contextmanager
+def highlight_weight(weight: float):
+    """Fit with :data:`HIGHLIGHT_WEIGHT` set to ``weight`` inside the block (0: the plain metrics,
+    as the papers fit; the Neumann perceptual figure compares the paper's two metrics so)."""
+    global HIGHLIGHT_WEIGHT
+    was, HIGHLIGHT_WEIGHT = HIGHLIGHT_WEIGHT, float(weight)
+    try:
+        yield
+    finally:
+        HIGHLIGHT_WEIGHT = was
 
 
 #: The highlight is held at incidences up to this angle (degrees).  Beyond, lobes differ by
