@@ -804,10 +804,12 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.argument("source")
 @click.option("--to", "to", required=True, metavar="TARGET",
               help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, blendbsdf, "
-                   "blendbsdf-tir, principled), gltf, or a registered model.")
+                   "blendbsdf-tir, principled), gltf, materialx, usd (the glTF fit as OpenPBR/UsdPreviewSurface), "
+                   "or a registered model.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
-                   "or .gltf (with --to gltf); - for standard output (the .gltf's text with --to gltf, else the .json's).")
+                   "or .gltf (with --to gltf), .mtlx (--to materialx), .usda (--to usd); - for standard output (that "
+                   "file's text with those targets, else the .json's).")
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
 @click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
@@ -819,7 +821,7 @@ def convert_cmd(source, to, out, metric, as_json):
     """
     from pathlib import Path
 
-    from .conversion import check_output, convert
+    from .conversion import GLTF_SHAPED, check_output, convert
 
     if out == "-" and as_json:
         _fail("--out - and --json both write to standard output: give --out a file")
@@ -828,7 +830,7 @@ def convert_cmd(source, to, out, metric, as_json):
             check_output(out, to)          # a bad --out is refused before minutes of fitting
         res = convert(source, to=to, metric=metric)
         if out == "-" and res.items:       # the file's text alone on stdout: .gltf for glTF, else .json
-            click.echo(res.text(".gltf" if res.to == "gltf" else ".json", Path.cwd()), nl=False)
+            click.echo(res.text(GLTF_SHAPED.get(res.to, ".json"), Path.cwd()), nl=False)
         path = res.write(out) if out != "-" and res.items else None
     except ValueError as e:
         _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))

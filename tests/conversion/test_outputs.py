@@ -195,3 +195,26 @@ def test_out_dash_writes_the_files_text_to_standard_output(tmp_path):
         "type": "rgb", "value": pytest.approx([0.5, 0.4, 0.3], abs=1e-6)}}}
     r = _cli("lambertian:rd=0.5", "--to", "mitsuba", "--out", "-", "--json")
     assert r.exit_code == 2 and "--out - and --json both write to standard output" in r.output
+
+
+@pytest.mark.parametrize("to, suffix", [("materialx", ".mtlx"), ("usd", ".usda")])
+def test_convert_to_materialx_and_usd_writes_a_file_its_checker_accepts(tmp_path, to, suffix):
+    pytest.importorskip("MaterialX")
+    pytest.importorskip("pxr")
+    from plausible.export.materialx import check_materialx
+    from plausible.export.usd import check_usd, read_usd_materials
+
+    out = tmp_path / f"out{suffix}"
+    r = _cli("lambertian:rd=0.25", "--to", to, "--out", out)
+    assert r.exit_code == 0, r.output
+    if to == "materialx":
+        assert check_materialx(out.read_text()) == [] and 'name="base_color" type="color3" value="0.25, 0.25, 0.25"' in out.read_text()
+    else:
+        assert check_usd(out) == [] and np.allclose(read_usd_materials(out)["lambertian"]["diffuseColor"], 0.25)
+
+
+@pytest.mark.parametrize("to, out, words", [("gltf", "x.mtlx", "a .mtlx file holds MaterialX materials"),
+                                            ("materialx", "x.usda", "a .usda file holds USD materials")])
+def test_a_mtlx_or_usda_output_needs_its_target(tmp_path, to, out, words):
+    r = _cli("lambertian:rd=0.5", "--to", to, "--out", tmp_path / out)
+    assert r.exit_code == 2 and words in r.output and list(tmp_path.iterdir()) == [], r.output

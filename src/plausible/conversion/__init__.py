@@ -18,6 +18,9 @@ plausible models, and fits a *target* to each:
 * ``"gltf"``: the glTF 2.0 metallic-roughness material, the registered model
   ``gltf-pbr`` fitted the same way, written by :func:`plausible.export.gltf.write_gltf`
   (refused with a message where that model is not installed);
+* ``"materialx"``, ``"usd"``: the glTF fit written as a MaterialX document (an ``open_pbr_surface`` and a
+  ``gltf_pbr`` per material, :mod:`plausible.export.materialx`) or a USD file of ``UsdPreviewSurface``
+  materials (:mod:`plausible.export.usd`), ``docs/materialx.md``;
 * any registered model: :func:`plausible.fit`.
 
 What a reflection model does not hold is converted beside the fit (an MTL's glass as Mitsuba's
@@ -181,11 +184,28 @@ class Conversion:
                                             textures=self.gltf_textures(where),
                                             surfaces={c.name: c.surface for c in self.items if c.surface}),
                               indent=1) + "\n"
+        if suffix in (".mtlx", ".usda"):
+            return self.dcc_text(suffix, where)
         if suffix == ".json":
             return json.dumps(self.mitsuba_dicts(where), indent=2) + "\n"
         if suffix == ".xml":
             return mitsuba_xml(self.mitsuba_dicts(where))
-        raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {suffix!r}")
+        raise ValueError(f"out: the output file must end in .json, .xml or .gltf{_DCC_SUFFIXES}, got {suffix!r}")
+
+    def dcc_text(self, suffix: str, where=None) -> str:
+        """The ``.mtlx`` (:func:`plausible.export.materialx.materialx_text`) or ``.usda``
+        (:func:`plausible.export.usd.usd_text`) text of the glTF-shaped results, the base colour
+        textures relative to the folder ``where``."""
+        textures = {name: slots["baseColorTexture"] for name, slots in self.gltf_textures(where).items()}
+        materials = {c.name: c.result for c in self.items}
+        surfaces = {c.name: c.surface for c in self.items if c.surface}
+        if suffix == ".mtlx":
+            from ..export.materialx import materialx_text
+
+            return materialx_text(materials, textures=textures, surfaces=surfaces)
+        from ..export.usd import usd_text
+
+        return usd_text(materials, textures=textures, surfaces=surfaces)
 
     def gltf_textures(self, where=None) -> dict:
         """``{material: {glTF texture slot: file}}`` of the textures a ``.gltf`` file references
@@ -211,7 +231,10 @@ def texture_path(name: str, folder, where) -> str:
 
 
 #: The output suffixes :meth:`Conversion.write` writes.
-OUTPUTS = (".json", ".xml", ".gltf")
+OUTPUTS = (".json", ".xml", ".gltf", ".mtlx", ".usda")
+#: Targets fitted as the ``gltf-pbr`` model (and written by their own writer) -> their file's suffix.
+GLTF_SHAPED = {"gltf": ".gltf", "materialx": ".mtlx", "usd": ".usda"}
+_DCC_SUFFIXES = " (or .mtlx with --to materialx, .usda with --to usd)"
 
 
 def check_output(path, to: str) -> str:
@@ -221,12 +244,15 @@ def check_output(path, to: str) -> str:
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix not in OUTPUTS:
-        raise ValueError(f"out: the output file must end in .json, .xml or .gltf, got {str(path)!r}")
-    if suffix == ".gltf":
+        raise ValueError(f"out: the output file must end in .json, .xml or .gltf{_DCC_SUFFIXES}, got {str(path)!r}")
+    if suffix in GLTF_SHAPED.values():
         _gltf_writer()
-        if str(to).strip() != "gltf":
-            raise ValueError(f"out: a .gltf file holds glTF materials; convert with to='gltf' (this "
+        want = next(k for k, v in GLTF_SHAPED.items() if v == suffix)
+        if str(to).strip() != want:
+            what = {"gltf": "glTF", "materialx": "MaterialX", "usd": "USD"}[want]
+            raise ValueError(f"out: a {suffix} file holds {what} materials; convert with to={want!r} (this "
                              f"conversion is to {str(to).strip()!r})")
+        _dcc_writer(want)
     folder = p.parent if str(p.parent) else Path(".")
     if not folder.is_dir():
         raise ValueError(f"out: the folder of {str(path)!r} does not exist ({str(folder)!r})")
@@ -249,6 +275,18 @@ def _gltf_writer():
     except (ValueError, ImportError):
         raise ValueError(_GLTF_REFUSAL) from None
     return write_gltf
+
+
+def _dcc_writer(to: str) -> None:
+    """ValueError naming the package where the writer of ``to`` (materialx, usd) is not installed."""
+    if to == "materialx":
+        from ..export.materialx import _mx
+
+        _mx()
+    elif to == "usd":
+        from ..export.usd import _usd
+
+        _usd()
 
 
 _GLTF_REFUSAL = ("glTF output is not available yet: the glTF target (the Khronos metallic-roughness BRDF "
@@ -368,8 +406,8 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     """Convert every material of ``source`` to ``to`` under ``metric`` (module docstring).
 
     ``to``: ``"mitsuba"``, ``"mitsuba:TYPE"`` (``diffuse``, ``roughconductor``,
-    ``roughplastic``, ``blendbsdf``, ``blendbsdf-tir``, ``principled``), ``"gltf"``, or a
-    registered model's name.
+    ``roughplastic``, ``blendbsdf``, ``blendbsdf-tir``, ``principled``), ``"gltf"``, ``"materialx"``,
+    ``"usd"`` (the glTF fit, :data:`GLTF_SHAPED`), or a registered model's name.
     ``metric``: one of :data:`plausible.fitting.metrics.METRICS` (the perceptual
     metric, default, fits lobe and albedo together).  ``starts``: optimiser
     starts of a registered-model fit.  ``looks``: render source and target side by side
@@ -383,8 +421,9 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
     to = str(to).strip()
     family = None
-    if to == "gltf":
+    if to in GLTF_SHAPED:
         _gltf_writer()          # refused with a clear message until the glTF target is installed
+        _dcc_writer(to)
         family = GLTF_MODEL
     if to.startswith("mitsuba:"):
         family = to.split(":", 1)[1]
@@ -392,7 +431,7 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
             raise ValueError(f"to: Mitsuba target type {family!r} is not fitted; choose one of "
                              f"{', '.join('mitsuba:' + k for k in CM.FAMILIES if k not in CM.PLAUSIBLE_TYPES)} (or 'mitsuba' to let the "
                              f"source choose)")
-    elif to not in ("mitsuba", "gltf"):
+    elif to != "mitsuba" and to not in GLTF_SHAPED:
         from .. import registry
 
         registry.info(to)    # a clear error for an unknown name
@@ -410,20 +449,20 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
                 continue
             src_alb = _source_albedo(src.model)
             warn = list(src.warnings) + _conserving(src, src_alb)
-            if to.startswith("mitsuba") or to == "gltf":
+            if to.startswith("mitsuba") or to in GLTF_SHAPED:
                 c = _to_mitsuba(src, family, metric, src_alb, warn)
             else:
                 c = _to_model(src, to, metric, starts, src_alb, warn)
             if looks:
                 _add_looks(c, src.model)
-            items.append(_with_surface(c, src, to))
+            items.append(_dcc_warnings(_with_surface(c, src, to), to))
     return Conversion(to, metric, items, skipped)
 
 
 def _refusal(src, to: str):
-    """Why ``src`` cannot be converted to ``to`` (None: it can): glass goes to ``mitsuba`` and ``gltf``
-    only (a reflection model, or a Mitsuba family forced, has no transmission)."""
-    if "glass" in src.surface and to not in ("mitsuba", "gltf"):
+    """Why ``src`` cannot be converted to ``to`` (None: it can): glass goes to ``mitsuba`` and the glTF-shaped
+    targets only (a reflection model, or a Mitsuba family forced, has no transmission)."""
+    if "glass" in src.surface and to != "mitsuba" and to not in GLTF_SHAPED:
         return (f"material {src.name!r} is glass (Mitsuba's {src.surface['glass']}): it converts to 'mitsuba' or "
                 f"'gltf', not to {to!r} (a reflection model has no transmission): skipped")
     return None
@@ -438,7 +477,7 @@ def _glass(src, to: str) -> Converted:
 
     sf = src.surface
     notes = list(src.notes) + ["glass: converted by its statements, not fitted (no error figures)"]
-    if to == "gltf":
+    if to in GLTF_SHAPED:
         params = {"base_color": sf["transmittance"], "metallic": 0.0, "roughness": 0.01}
         notes.append("glTF: KHR_materials_transmission 1 and KHR_materials_ior; roughness 0.01 (the model's "
                      "smallest), thin-walled (no KHR_materials_volume: the thickness of a mesh is unknown here)")
@@ -468,7 +507,7 @@ def _with_surface(c: Converted, src, to: str) -> Converted:
             c.result = c.params = {"type": "mask", "opacity": opacity, "bsdf": c.result}
             c.notes.append(f"Mitsuba mask of opacity {sf.get('opacity_map', sf.get('opacity'))}"
                            + (" (map_d; d is not multiplied in)" if "opacity_map" in sf and "opacity" in sf else ""))
-        elif to == "gltf":
+        elif to in GLTF_SHAPED:
             if "opacity" in sf:
                 c.surface["alpha"] = float(sf["opacity"])
                 c.notes.append(f"d {sf['opacity']:g}: glTF alphaMode BLEND, baseColorFactor alpha {sf['opacity']:g}")
@@ -480,7 +519,7 @@ def _with_surface(c: Converted, src, to: str) -> Converted:
                               f"dropped: a registered model has none")
     if "emission" in sf:
         ke = sf["emission"]
-        if to == "gltf":
+        if to in GLTF_SHAPED:
             c.surface["emissive"] = list(ke)
             c.notes.append(f"Ke {_colour(ke)}: glTF emissiveFactor" + (" (with KHR_materials_emissive_strength "
                                                                           f"{max(ke):g})" if max(ke) > 1 else ""))
@@ -488,6 +527,20 @@ def _with_surface(c: Converted, src, to: str) -> Converted:
             c.warnings.append(f"Ke {_colour(ke)} (emission) dropped: a BSDF does not emit; in Mitsuba give the "
                               f"shapes of this material an emitter {{'type': 'area', 'radiance': {{'type': 'rgb', "
                               f"'value': {list(ke)}}}}}")
+    return c
+
+
+def _dcc_warnings(c: Converted, to: str) -> Converted:
+    """``c`` with what its target format (materialx: OpenPBR; usd: UsdPreviewSurface) cannot express of
+    the fitted glTF material among its warnings (:func:`plausible.export.materialx.open_pbr_inputs`,
+    :func:`plausible.export.usd.preview_inputs`; the ``gltf_pbr`` of a ``.mtlx`` is exact)."""
+    if to == "materialx":
+        from ..export.materialx import open_pbr_inputs as inputs
+    elif to == "usd":
+        from ..export.usd import preview_inputs as inputs
+    else:
+        return c
+    c.warnings.extend(w for w in inputs(c.result, c.surface)[1] if w not in c.warnings)
     return c
 
 
