@@ -10,6 +10,11 @@ uniform a ``const`` of its value, and MaterialX's ``main`` is called as ``mx_mai
 shining along ``-wi``.  MaterialX's reflection closures return ``f cos(theta_i)`` times the light's
 intensity (``mx_generalized_schlick_bsdf``: "NdotL is cancelled out"), so the pixel is
 ``f(wi, wo) cos(theta_i)``.
+
+An image node's texture (``uniform sampler2D``) can be the harness's third input (``in2``: an ``RGBA32F``
+texture of the harness's size, read at the pixel's own texel, ``texcoord_0`` its centre): the texel
+``k / 255`` is what the GPU gives a shader for the 8-bit value ``k`` of an ``RGBA8`` texture (unsigned
+normalised), before any colour space decode, which is the shader's (MaterialX's colour management).
 """
 
 from __future__ import annotations
@@ -38,9 +43,19 @@ def _literal(t: str, v) -> str:
     return f"{t}(" + ", ".join(_float(x) for x in v) + ")"
 
 
-def harness_shader(source: str, uniforms: dict) -> tuple[str, str]:
-    """``(code, body)`` for ``Browser.run`` from MaterialX's pixel shader and its uniforms' values."""
+#: The texture coordinate of the pixel's own texel of ``in2`` (an image read per pixel).
+TEXCOORD = "texcoord_0 = (vec2(ij) + 0.5) / vec2(textureSize(in2, 0));\n    "
+
+
+def harness_shader(source: str, uniforms: dict, image: str | None = None) -> tuple[str, str]:
+    """``(code, body)`` for ``Browser.run`` from MaterialX's pixel shader and its uniforms' values;
+    ``image``: the sampler uniform (an image node's ``file``) read from the harness's input ``in2``."""
     code = source.replace("#version 300 es", "")
+    if image is not None:
+        decl = f"uniform sampler2D {image};"
+        if decl not in code:
+            raise ValueError(f"image: no sampler {image!r} in the shader")
+        code = code.replace(decl, f"#define {image} in2")
     code = re.sub(r"^in (\w+) (\w+);", r"\1 \2;", code, flags=re.M)
     code = re.sub(r"^out vec4 out1;", "vec4 out1;", code, flags=re.M)
     for decl in ("vec3 u_viewPosition;", "int u_numActiveLightSources;", "LightData u_lightData[MAX_LIGHT_SOURCES];"):
@@ -55,4 +70,4 @@ def harness_shader(source: str, uniforms: dict) -> tuple[str, str]:
         # used by the transmission's environment lookup, declared by MaterialX's viewer, not by the generator
         code = "const bool u_refractionTwoSided = false;\n" + code
     code = re.sub(r"^void main\(\)", "void mx_main()", code, flags=re.M)
-    return code, BODY
+    return code, (TEXCOORD if image is not None else "") + BODY

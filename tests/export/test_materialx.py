@@ -105,7 +105,7 @@ def test_the_texture_is_an_srgb_image_times_the_base_colour():
 def test_the_anisotropy_rotation_turns_the_openpbr_tangent_about_the_normal():
     doc = read_materialx(materialx_text(MATERIALS))
     rot = doc.getChild("red_plastic_rotated_tangent")
-    assert rot.getInput("amount").getValue() == pytest.approx(math.degrees(0.5))
+    assert rot.getInput("amount").getValue() == pytest.approx(-math.degrees(0.5))      # rotate3d turns clockwise
     assert rot.getInput("axis").getNodeName() == "red_plastic_normal"
     assert doc.getChild("red_plastic_open_pbr_surface").getInput("geometry_tangent").getNodeName() == rot.getName()
 

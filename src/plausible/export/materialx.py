@@ -216,14 +216,19 @@ def _texture(mx, doc, name: str, filename: str, colour: list):
 
 def _tangent(mx, doc, name: str, rotation: float):
     """The world tangent turned by ``rotation`` (radians, counter-clockwise seen from the normal, as
-    KHR_materials_anisotropy's ``anisotropyRotation``) about the world normal: a ``rotate3d`` node."""
+    KHR_materials_anisotropy's ``anisotropyRotation``) about the world normal: a ``rotate3d`` node of
+    ``amount = -degrees(rotation)``.  MaterialX's ``rotate3d`` turns clockwise seen from its axis
+    (``mx_rotate_vector3``: ``v c + (v x axis) s + ...``, the row-vector form of Rodrigues' formula),
+    so a counter-clockwise turn is a negative amount, as MaterialX's own ``gltf_pbr`` writes it
+    (``libraries/bxdf/gltf_pbr.mtlx``: ``rad_2_deg`` multiplies by -57.29578); measured in the
+    browser (``tests/export/test_materialx_glsl.py``: the axis at ``+r``, not ``-r``)."""
     t = doc.addNode("tangent", f"{name}_tangent", "vector3")
     t.setInputValue("space", "world")
     n = doc.addNode("normal", f"{name}_normal", "vector3")
     n.setInputValue("space", "world")
     rot = doc.addNode("rotate3d", f"{name}_rotated_tangent", "vector3")
     rot.addInput("in", "vector3").setConnectedNode(t)
-    _set(rot, "amount", math.degrees(rotation))
+    _set(rot, "amount", -math.degrees(rotation))
     rot.addInput("axis", "vector3").setConnectedNode(n)
     return rot
 
@@ -333,7 +338,9 @@ def essl_pixel_shader(doc_or_text, material: str, lights: int = 1) -> tuple[str,
     """``(source, uniforms)``: the GLSL ES 3.00 pixel shader MaterialX's own generator
     (``EsslShaderGenerator``) writes for ``material`` of a document -- no environment light
     (``SPECULAR_ENVIRONMENT_NONE``), up to ``lights`` directional lights (``ND_directional_light``, light
-    type 1, the uniforms ``u_lightData``) -- and its public uniforms' values (name -> number or list)."""
+    type 1, the uniforms ``u_lightData``), image files decoded from their colour space by MaterialX's
+    ``DefaultColorManagementSystem`` (``srgb_texture`` -> ``lin_rec709``) -- and its public uniforms'
+    values (name -> number or list; an image's ``file`` as its file name)."""
     mx = _mx()
     import MaterialX.PyMaterialXGenGlsl as mx_glsl
     import MaterialX.PyMaterialXGenShader as mx_gen
@@ -350,6 +357,11 @@ def essl_pixel_shader(doc_or_text, material: str, lights: int = 1) -> tuple[str,
     opts.hwSpecularEnvironmentMethod = mx_gen.SPECULAR_ENVIRONMENT_NONE
     opts.hwMaxActiveLightSources = int(lights)
     opts.hwShadowMap = False
+    # the colour spaces of image files (srgb_texture) decoded to the document's (lin_rec709), as
+    # MaterialX's viewer does: without a colour management system the generator ignores them
+    cms = mx_gen.DefaultColorManagementSystem.create(gen.getTarget())
+    cms.loadLibrary(_library())
+    gen.setColorManagementSystem(cms)
     mx_gen.HwShaderGenerator.bindLightShader(_library().getNodeDef("ND_directional_light"), 1, ctx)
     shader = gen.generate(material, node, ctx)
     stage = shader.getStage(mx_gen.PIXEL_STAGE)
