@@ -855,7 +855,7 @@ def _convert_table(res, path):
         diffs = " / ".join(f"{c.albedo[k]['max_abs_difference']:.3f}" for k in c.albedo) or "- (not fitted)"
         perceptual = c.errors.get("perceptual")
         flip, ratio = _looks_cells(c.looks)
-        t.add_row(escape(c.name), escape(c.target), "-" if perceptual is None else f"{perceptual:.3g}", diffs,
+        t.add_row(escape(c.name), escape(c.label), "-" if perceptual is None else f"{perceptual:.3g}", diffs,
                   flip, ratio, escape("; ".join(c.warnings)) or "-")
     console.print(t)
     for c in res.items:     # the image's verdict on stderr too: a warning, not a cell to find

@@ -116,9 +116,19 @@ class Converted:
     looks: object = None
     #: A Mitsuba target as fitted, before textures replaced its colours (what :attr:`looks` renders).
     fitted: dict | None = None
+    #: The registered model fitted where the target is a format written from one (``gltf-pbr`` for
+    #: ``gltf``, ``materialx``, ``usd``: :data:`GLTF_SHAPED`); None for a Mitsuba or model target.
+    model: str | None = None
+
+    @property
+    def label(self) -> str:
+        """The target as the report's table shows it: the target asked for, with the model fitted
+        where that is another name (``materialx (gltf-pbr fit)``)."""
+        return self.target if self.model is None or self.target == "gltf" else f"{self.target} ({self.model} fit)"
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "source": self.source, "target": self.target, "params": self.params,
+        return {"name": self.name, "source": self.source, "target": self.target, "model": self.model,
+                "params": self.params,
                 "error": self.errors, "albedo": self.albedo, "warnings": self.warnings, "notes": self.notes,
                 "textures": self.textures, "surface": self.surface,
                 "looks": self.looks.to_dict() if self.looks is not None else None}
@@ -445,7 +455,7 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
                 skipped.append({"name": src.name, "skipped": why})
                 continue
             if "glass" in src.surface:
-                items.append(_glass(src, to))
+                items.append(_as_asked(_glass(src, to), to))
                 continue
             src_alb = _source_albedo(src.model)
             warn = list(src.warnings) + _conserving(src, src_alb)
@@ -455,8 +465,16 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
                 c = _to_model(src, to, metric, starts, src_alb, warn)
             if looks:
                 _add_looks(c, src.model)
-            items.append(_dcc_warnings(_with_surface(c, src, to), to))
+            items.append(_as_asked(_dcc_warnings(_with_surface(c, src, to), to), to))
     return Conversion(to, metric, items, skipped)
+
+
+def _as_asked(c: Converted, to: str) -> Converted:
+    """``c`` with the target asked for (``gltf``, ``materialx``, ``usd``) and the model fitted for it
+    (``gltf-pbr``) where the target is glTF-shaped (:data:`GLTF_SHAPED`); else ``c`` as it is."""
+    if to in GLTF_SHAPED:
+        c.target, c.model = to, GLTF_MODEL
+    return c
 
 
 def _refusal(src, to: str):
