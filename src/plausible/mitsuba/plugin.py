@@ -528,11 +528,21 @@ class FastUpdate:
         self.readers = {k: r for k, r in readers.items() if r is not None}
         numbers = {k for k in state.q_opaque if k in state.arrays and state.flags[k] == F.Differentiable}
         self.names = frozenset(numbers | set(self.readers)) if data_only and not pointwise else frozenset()
-        self.params = {k: state.info.param(k) for k in self.names}
-        self.scalars = {k for k in self.names if not self.params[k].is_color}
-        self.constrained = P.has_constraints(state.info) and not state.derived
-        self.build_to_check = P.has_constraints(state.info) and bool(state.derived)
+        params = {k: state.info.param(k) for k in self.names}
+        self.ranges = {k: (prm.lo, prm.hi) for k, prm in params.items()}
+        self.colors = {k for k, prm in params.items() if prm.is_color}
+        self.scalars = self.names - self.colors
+        self.constrained = P.has_constraints(state.info)
+        self.aniso = state.mi.BSDFFlags.Anisotropic
         self.iso_free = bool(self.scalars) and self._isotropic_anywhere()
+        self._sync()
+
+    def _sync(self):
+        """After a model was built: whether each colour is zero now (the isotropy
+        probe's key, :meth:`ParamState._isotropic`)."""
+        model = self.state.hooks
+        self.seen = model
+        self.zero = {k: bool(np.all(np.asarray(model.params[k]) == 0)) for k in self.colors}
 
     def _isotropic_anywhere(self) -> bool:
         """Is the model isotropic at a generic point of its scalars (each moved by its own
@@ -540,59 +550,69 @@ class FastUpdate:
         model = self.state.hooks
         moved = {}
         for i, k in enumerate(sorted(self.scalars)):
-            prm, v = self.params[k], float(model.params[k])
-            moved[k] = min(max(v * (1.137 + 0.211 * i) + 0.013 * (i + 1), prm.lo), prm.hi)
+            (lo, hi), v = self.ranges[k], float(model.params[k])
+            moved[k] = min(max(v * (1.137 + 0.211 * i) + 0.013 * (i + 1), lo), hi)
         try:
             return is_isotropic(model) and is_isotropic(model.replace(**moved))
         except ValueError:
             return False
 
     def take(self, keys) -> bool:
-        """Take the new values of ``keys`` if all may (see the class); True if taken."""
+        """Take the new values of ``keys`` if all may (see the class); True if taken.
+        Written for the fewest Python calls (a dozen; the count is what
+        ``tests/mitsuba/test_update_cost.py`` holds against a built-in's)."""
         st = self.state
         if not self.names.issuperset(keys):
             return False
-        current = dict(st.hooks.params) if st.pending or self.constrained else st.hooks.params
-        current.update(st.pending) if st.pending else None
+        if st._model is not self.seen:
+            self._sync()
         new, images = {}, {}
         for k in keys:
-            prm = self.params[k]
+            lo, hi = self.ranges[k]
             if k in self.readers:
                 if not st.known[k]:
-                    return False
+                    return False  # clamped before: the full path checks it again
                 c = self.readers[k]()
-                if not all(prm.lo <= x <= prm.hi for x in c):
-                    return False
+                for x in c:
+                    if not lo <= x <= hi:  # outside, or NaN: the full path warns or refuses
+                        return False
                 v = sum(c) / len(c)
             else:
                 v = st.arrays[k][0]
-                if not prm.lo <= v <= prm.hi:
+                if not lo <= v <= hi:
                     return False
-                images[k] = np.array((v,), dtype=np.float32)
-            if prm.is_color and (v == 0) != bool(np.all(np.asarray(current[k]) == 0)):
-                return False  # the isotropy probe's key (ParamState._isotropic)
-            if k in self.scalars and not self.iso_free and not st.m_flags & st.mi.BSDFFlags.Anisotropic:
+                images[k] = v
+            if k in self.colors:
+                if (v == 0) != self.zero[k]:
+                    return False
+            elif not (self.iso_free or st.m_flags & self.aniso):
                 return False
             new[k] = v
-        if self.constrained or self.build_to_check:
-            if not self._constraints_hold(current, new):
-                return False
-        for k, img in images.items():
-            st.exact[k] = (new[k], img)
-            st.accepted[k] = img
-        for k in new.keys() - images.keys():
-            st.means[k] = new[k]
+        if self.constrained and not self._constraints_hold(new):
+            return False
+        for k, v in images.items():
+            st.exact[k] = (v, np.array((v,), dtype=np.float32))
+            st.accepted[k] = st.exact[k][1]
+        for k in self.colors.intersection(new):
+            self.zero[k] = new[k] == 0
+            if k in self.readers:
+                st.means[k] = new[k]
         st.pending.update(new)
         return True
 
-    def _constraints_hold(self, current, new) -> bool:
-        values = dict(current)
+    def _constraints_hold(self, new) -> bool:
+        """The model's constraints between parameters at the new values: checked on the
+        values alone (:meth:`~plausible.bxdf.BxDF.check_constraints`), or by building the
+        model where one of its values is derived from others (Neumann's ``c``)."""
+        st = self.state
+        values = dict(st._model._params)
+        values.update(st.pending)
         values.update(new)
         try:
-            if self.build_to_check:
-                self.state.make(**{k: v for k, v in values.items() if k not in self.state.derived})
+            if st.derived:
+                st.make(**{k: v for k, v in values.items() if k not in st.derived})
             else:
-                type(self.state.hooks).check_constraints(values)
+                type(st._model).check_constraints(values)
         except ValueError:
             return False  # the full path refuses the value with the model's own message
         return True

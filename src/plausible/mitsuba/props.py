@@ -405,12 +405,22 @@ def constant_reader(mi, tex):
     ptr, cpptype, node, _ = params.properties["value"]
     jit = dr.is_jit_v(mi.Float)
 
-    def read() -> list:
-        v = mi.get_property(ptr, cpptype, node) if cpptype is not None else ptr
-        if not jit:
-            return [float(x) for x in v] if dr.depth_v(v) else [float(v)]
-        return [c[0] for c in v] if dr.depth_v(v) > 1 else [v[0]]
+    def get():
+        return mi.get_property(ptr, cpptype, node) if cpptype is not None else ptr
 
+    depth, size = dr.depth_v(get()), dr.size_v(get())
+    if jit and depth == 2 and size == 3:  # Color3f: the common case, without a loop
+        def read() -> tuple:
+            v = mi.get_property(ptr, cpptype, node) if cpptype is not None else ptr
+            return v[0][0], v[1][0], v[2][0]
+    elif jit:
+        def read() -> tuple:
+            v = get()
+            return tuple(c[0] for c in v) if depth > 1 else (v[0],)
+    else:
+        def read() -> tuple:
+            v = get()
+            return tuple(float(x) for x in v) if depth else (float(v),)
     return read
 
 
