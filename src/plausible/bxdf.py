@@ -299,6 +299,16 @@ class BxDF:
         (:func:`plausible.kernel_params.default_structure`)."""
         return kernel_params.default_structure(self)
 
+    def for_changing_data(self):
+        """The model to trace once and run at many values of its data parameters (a
+        Mitsuba plugin under ``params.update()``): one whose traced code depends on
+        those values only through ``p`` and ``q`` (:mod:`plausible.kernel_params`), so
+        a new value compiles nothing.  The model itself where its structure is the
+        default one; a model whose structure depends on values (He-Torrance's number
+        of series terms) returns a copy whose structure does not, or None where it
+        cannot.  Returns itself when it is such a model already."""
+        return self if type(self)._structure is BxDF._structure else None
+
     @property
     def reciprocal(self) -> bool:
         """Whether the model claims ``f(wi, wo) = f(wo, wi)``: the one place to ask.

@@ -39,7 +39,7 @@ import numpy as np
 
 from .. import progress, registry, vec
 from ..integrals.albedo import is_isotropic
-from ..bxdf import BxDF, add_values, mixture_f, mixture_pdf, mixture_sample
+from ..bxdf import add_values, mixture_f, mixture_pdf, mixture_sample
 from . import props as P
 
 
@@ -328,7 +328,8 @@ class ParamState:
     def _set_model(self, model, vals):
         """Keep ``model`` (built from ``vals``), the values to restore if a later update
         is refused, and the sampling constants."""
-        self._model, self.pending = model, {}
+        changing = model.for_changing_data()  # a new value compiles nothing (He-Torrance: every term)
+        self._model, self.pending = (model if changing is None else changing), {}
         self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
         self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
         self._set_sampling()
@@ -433,6 +434,9 @@ class ParamState:
         if keys and self.fast.take(keys):
             return False
         self.dirty = set(keys) if keys else None
+        for k, a in self.arrays.items():
+            if (not keys or k in keys) and self.flags[k] == self.mi.ParamFlags.Differentiable:
+                _dr().make_opaque(a)  # as Mitsuba's own plugins: a literal given is kernel data
         for k in [k for k in self.textures if k in keys or not keys]:  # the textures that changed
             try:
                 self.known[k] = self._check_texture(k)
@@ -505,10 +509,10 @@ class FastUpdate:
     What may take it (``names``): the traversed differentiable numbers and the constant
     textures (``<rgb>``, :func:`props.constant_reader`) whose sampling constants the
     hooks read as they are (:attr:`ParamState.q_opaque`), of a model whose traced code
-    depends on its values only through ``p`` and ``q`` (the default
-    :meth:`~plausible.bxdf.BxDF._structure`, the contract of
-    :mod:`plausible.kernel_params`: He-Torrance's term count is not), unless the model has
-    constraints between parameters and textures checked point by point.
+    depends on its values only through ``p`` and ``q`` (the contract of
+    :mod:`plausible.kernel_params`; :meth:`~plausible.bxdf.BxDF.for_changing_data`
+    returns the model itself: He-Torrance's copy that sums every term does), unless the
+    model has constraints between parameters and textures checked point by point.
 
     An update takes it (:meth:`take`) when every new value lies in its range (a colour:
     every channel, its texture in range before), no colour becomes or stops being zero,
@@ -521,7 +525,7 @@ class FastUpdate:
     def __init__(self, state):
         self.state = state
         model, F = state.hooks, state.mi.ParamFlags
-        data_only = type(model)._structure is BxDF._structure
+        data_only = model.for_changing_data() is model
         pointwise = P.has_constraints(state.info) and any(state.known[k] for k in state.varying)
         readers = {k: P.constant_reader(state.mi, state.textures[k]) for k in state.q_opaque
                    if k in state.textures}
@@ -534,6 +538,7 @@ class FastUpdate:
         self.scalars = self.names - self.colors
         self.constrained = P.has_constraints(state.info)
         self.aniso = state.mi.BSDFFlags.Anisotropic
+        self.make_opaque = _dr().make_opaque
         self.iso_free = bool(self.scalars) and self._isotropic_anywhere()
         self._sync()
 
@@ -593,6 +598,7 @@ class FastUpdate:
         for k, v in images.items():
             st.exact[k] = (v, np.array((v,), dtype=np.float32))
             st.accepted[k] = st.exact[k][1]
+            self.make_opaque(st.arrays[k])  # a literal given (mi.Float(0.4)) is kernel data too
         for k in self.colors.intersection(new):
             self.zero[k] = new[k] == 0
             if k in self.readers:
