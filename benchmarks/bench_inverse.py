@@ -21,6 +21,10 @@ itself at other colours.  Per iteration (after two warm-up iterations):
   (``dr.sync_thread()`` first), the median of 20; and the same when the previous
   render is still running (Dr.Jit's LLVM backend launches kernels asynchronously;
   reading a value back waits for them).
+
+First, :func:`update_table`: ``params.update()`` alone of one BSDF each (:data:`UPDATES`:
+the plugins' colours and numbers, ``roughplastic``/``diffuse`` colours and
+``roughconductor``'s alpha for reference), idle, median of 500, in microseconds.
 """
 
 from __future__ import annotations
@@ -129,6 +133,49 @@ def update_cost(plugin, res, spp, n=20):
     return statistics.median(idle), statistics.median(busy)
 
 
+#: ``params.update()`` alone, one BSDF each (issue 43, item 2): (label, BSDF dict, key scaled).
+UPDATES = [
+    ("roughplastic <rgb>", {"type": "roughplastic", "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.4, 0.3]}},
+     "diffuse_reflectance.value"),
+    ("diffuse <rgb>", {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5, 0.4, 0.3]}},
+     "reflectance.value"),
+    ("roughconductor alpha", {"type": "roughconductor", "alpha": 0.2}, "alpha.value"),
+    ("ashikhmin_shirley rs <rgb>", {"type": "ashikhmin_shirley", "rs": {"type": "rgb", "value": [0.2, 0.3, 0.25]},
+                                    "rd": {"type": "rgb", "value": [0.5, 0.4, 0.3]}}, "rs.value"),
+    ("modified_phong kd <rgb>", {"type": "modified_phong", "ks": {"type": "rgb", "value": [0.2, 0.3, 0.25]},
+                                 "kd": {"type": "rgb", "value": [0.5, 0.4, 0.3]}}, "kd.value"),
+    ("ward rd <rgb>", {"type": "ward", "rs": {"type": "rgb", "value": [0.2, 0.3, 0.25]},
+                       "rd": {"type": "rgb", "value": [0.5, 0.4, 0.3]}}, "rd.value"),
+    ("gltf_pbr base_color <rgb>", {"type": "gltf_pbr", "base_color": {"type": "rgb", "value": [0.2, 0.3, 0.25]}},
+     "base_color.value"),
+    ("lambertian rd <rgb>", {"type": "lambertian", "rd": {"type": "rgb", "value": [0.5, 0.4, 0.3]}}, "rd.value"),
+    ("he_torrance wavelength <rgb>", {"type": "he_torrance", "wavelength": {"type": "rgb", "value": [0.6, 0.5, 0.45]}},
+     "wavelength.value"),
+    ("ashikhmin_shirley nu", {"type": "ashikhmin_shirley", "nu": 10.0, "nv": 30.0}, "nu"),
+    ("ward alpha_x", {"type": "ward", "alpha_x": 0.2, "alpha_y": 0.3}, "alpha_x"),
+    ("cook_torrance m", {"type": "cook_torrance", "m": 0.2}, "m"),
+]
+
+
+def update_table(rounds=5, n=100):
+    """``params[key] *= 0.999 or 1.0005; params.update()`` on an idle device
+    (``dr.sync_thread()`` first), the BSDFs alternating in ``rounds`` rounds of ``n``
+    updates each; the median over all, in microseconds."""
+    made = []
+    for label, d, key in UPDATES:
+        params = mi.traverse(mi.load_dict(d))
+        made.append((label, params, key, []))
+    for _ in range(rounds):
+        for label, params, key, times in made:
+            for i in range(n):
+                params[key] = params[key] * (0.999 if i % 2 else 1.0005)
+                dr.sync_thread()
+                t0 = time.perf_counter()
+                params.update()
+                times.append(time.perf_counter() - t0)
+    return {label: 1e6 * statistics.median(times) for label, _, _, times in made}
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--res", default="64x48")
@@ -141,6 +188,10 @@ def main():
     import plausible.mitsuba as pm
 
     pm.register()
+    # before the kernel history is switched on: it adds its bookkeeping to every launch
+    print("params.update() alone, idle device, median of 500 (us):")
+    for label, us in update_table().items():
+        print(f"  {label:30s} {us:8.1f}")
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     runs = {plugin: Optimisation(plugin, res, args.spp) for plugin in CASES}
     for r in runs.values():

@@ -196,9 +196,21 @@ class BxDF:
         values.update(changes)
         return type(self)(**values)
 
+    @classmethod
+    def check_constraints(cls, params: dict) -> None:
+        """Raise ValueError where ``params`` (every parameter, each already in its
+        range) break the model's constraints between parameters, without building a
+        model: :meth:`_validate` run on a bare instance holding only ``params``.  The
+        Mitsuba plugins check a new value of ``params.update()`` so (a model's
+        construction costs 30-100 us; this, a few)."""
+        bare = cls.__new__(cls)
+        bare._params = params
+        bare._validate()
+
     # -- hooks a model implements -------------------------------------------------
     def _validate(self):
-        """Model-level constraints between parameters (raise ValueError)."""
+        """Model-level constraints between parameters (raise ValueError).  Reads only
+        ``self.params`` (:meth:`check_constraints` runs it on nothing else)."""
 
     def _f(self, ops, wi, wo, p):
         raise NotImplementedError
@@ -286,6 +298,16 @@ class BxDF:
         """What the traced kernel depends on besides data
         (:func:`plausible.kernel_params.default_structure`)."""
         return kernel_params.default_structure(self)
+
+    def for_changing_data(self):
+        """The model to trace once and run at many values of its data parameters (a
+        Mitsuba plugin under ``params.update()``): one whose traced code depends on
+        those values only through ``p`` and ``q`` (:mod:`plausible.kernel_params`), so
+        a new value compiles nothing.  The model itself where its structure is the
+        default one; a model whose structure depends on values (He-Torrance's number
+        of series terms) returns a copy whose structure does not, or None where it
+        cannot.  Returns itself when it is such a model already."""
+        return self if type(self)._structure is BxDF._structure else None
 
     @property
     def reciprocal(self) -> bool:

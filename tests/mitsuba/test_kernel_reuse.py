@@ -58,3 +58,25 @@ def test_a_new_rgb_value_compiles_no_new_kernel(plugin, history):
     params.update()
     second = kernel_hashes(bsdf, wi, wo)
     assert first and second <= first
+
+
+def test_he_torrance_compiles_no_new_kernel_for_a_new_wavelength_or_roughness(history):
+    """He-Torrance with every colour as <rgb> (wavelength 0.33/0.55/0.44 um, tau 1 um), then
+    each colour scaled differently and sigma0 raised: the second pass launches only kernels
+    of the first.  Before issue 43 the number of series terms came from the values
+    (wavelength x 0.8: 96 -> 128 terms, one new kernel per such value); the plugin sums
+    every term (HeTorrance.for_changing_data)."""
+    rng = np.random.default_rng(3)
+    wi, wo = upper_dirs(rng, 64, 0.2), upper_dirs(rng, 64, 0.2)
+    colours = {"wavelength": [0.33, 0.55, 0.44], "eta": [0.9, 1.5, 1.2], "k": [0.1, 0.2, 0.3],
+               "rs": [0.6, 1.0, 0.8], "rd": [0.1, 0.2, 0.1]}
+    bsdf = mi.load_dict({"type": "he_torrance", "tau": 1.0, "sigma0": 0.18,
+                         **{k: {"type": "rgb", "value": v} for k, v in colours.items()}})
+    first = kernel_hashes(bsdf, wi, wo)
+    params = mi.traverse(bsdf)
+    for i, k in enumerate(colours):
+        params[f"{k}.value"] = params[f"{k}.value"] * (0.8 - 0.05 * i)
+    params["sigma0"] = mi.Float(0.4)
+    params.update()
+    second = kernel_hashes(bsdf, wi, wo)
+    assert first and second <= first

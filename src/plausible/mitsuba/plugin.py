@@ -264,6 +264,7 @@ class ParamState:
         for k in set(self.varying) - set(self.q_varying):
             self._log(f"{plugin}: sampling uses the mean of texture {k!r} (the model's "
                       f"sampler is not array-safe in it)")
+        self.fast = FastUpdate(self)
 
     def _log(self, text):
         if self.log is not None:
@@ -306,6 +307,58 @@ class ParamState:
         """Build the NumPy model from the current values (every range and
         constraint checked by the model), the textures' pointwise constraints,
         and what the hooks need (``q``, flags)."""
+        vals, consts, no_mean = self._consts()
+        with progress.reporting(progress.ambient() or mitsuba_progress(self.mi, self.plugin)):
+            model = self._make_without_means(consts, no_mean)
+        known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
+        if known and P.has_constraints(self.info):
+            base = {k: v for k, v in consts.items() if k not in known}
+            # again only where a textured value or another parameter changed (1.4 s for a 256^2 map)
+            key = (sorted(known), repr(sorted(base.items())))
+            if self.dirty is None or set(known) & self.dirty or key != self.pointwise_key:
+                pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
+                P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
+            self.pointwise_key = key
+        self._set_model(model, vals)
+        self.m_flags, self.components, self.sampled_types = bsdf_flags(
+            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()),
+            self._isotropic(model, consts))
+        self.lobe_types = lobe_types(self.mi, model)
+
+    def _set_model(self, model, vals):
+        """Keep ``model`` (built from ``vals``), the values to restore if a later update
+        is refused, and the sampling constants."""
+        changing = model.for_changing_data()  # a new value compiles nothing (He-Torrance: every term)
+        self._model, self.pending = (model if changing is None else changing), {}
+        self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
+        self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
+        self._set_sampling()
+
+    @property
+    def model(self):
+        """The NumPy model of the current values.  After updates that took the fast path
+        (:class:`FastUpdate`, which builds none) it is built here, when first asked for;
+        the plugin's hooks run on :attr:`hooks` instead."""
+        if self.pending:
+            self.dirty = set()  # every value the fast path took is in ``exact`` and ``means``
+            vals, consts, no_mean = self._consts()
+            self._set_model(self._make_without_means(consts, no_mean), vals)
+        return self._model
+
+    @model.setter
+    def model(self, model):
+        self._model, self.pending = model, {}
+
+    @property
+    def hooks(self):
+        """The model whose hooks the plugin calls: the last one built.  The fast path
+        changes only values the hooks read from ``p`` and ``q`` (kernel data), never
+        the model's structure, so this model serves them unchanged."""
+        return self._model
+
+    def _consts(self):
+        """``(values, constants, textures without a mean)``: :meth:`values`, with each
+        texture's mean clamped into its range (read again where ``dirty``)."""
         vals = self.values()
         consts = {k: v for k, v in vals.items() if v is not None}
         no_mean = []
@@ -318,25 +371,7 @@ class ParamState:
                 no_mean.append(name)
                 continue
             consts[name] = min(max(mean, prm.lo), prm.hi)
-        with progress.reporting(progress.ambient() or mitsuba_progress(self.mi, self.plugin)):
-            model = self._make_without_means(consts, no_mean)
-        known = {k: t for k, t in self.textures.items() if self.known[k] and P.texture_varies(t)}
-        if known and P.has_constraints(self.info):
-            base = {k: v for k, v in consts.items() if k not in known}
-            # again only where a textured value or another parameter changed (1.4 s for a 256^2 map)
-            key = (sorted(known), repr(sorted(base.items())))
-            if self.dirty is None or set(known) & self.dirty or key != self.pointwise_key:
-                pts = P.values_at_uv(self.mi, self.info, known, P.uv_grid(self.mi, known.values()))
-                P.check_pointwise(self.plugin, self.info, base, pts, warn=self._log)
-            self.pointwise_key = key
-        self.model = model
-        self.accepted = {k: np.array(a) for k, a in self.arrays.items()}  # restored if refused
-        self.exact = {k: (vals[k], self.accepted[k]) for k in self.arrays}
-        self._set_sampling()
-        self.m_flags, self.components, self.sampled_types = bsdf_flags(
-            self.mi, model, self.info, any(P.texture_varies(t) for t in self.textures.values()),
-            self._isotropic(model, consts))
-        self.lobe_types = lobe_types(self.mi, model)
+        return vals, consts, no_mean
 
     def _isotropic(self, model, consts) -> bool:
         """:func:`~plausible.analysis.is_isotropic` of ``model`` (the probe: two NumPy
@@ -385,17 +420,23 @@ class ParamState:
         return self.make(**consts)
 
     def _set_sampling(self):
-        """The sampling constants ``q`` of the model; opaque arrays, not literals,
-        where the sampler takes arrays, so a new value does not recompile kernels."""
-        self.q_const = dict(vars(self.model.q))
-        for k in self.q_opaque:
-            self.q_const[k] = _dr().opaque(self.mi.Float, self.q_const[k])
+        """The sampling constants ``q`` of the model.  Those of :attr:`q_opaque` are
+        read from the current values when the hooks are traced (:meth:`q`), so a new
+        value is kernel data and compiles nothing."""
+        self.q_const = dict(vars(self._model.q))
 
-    def changed(self, keys):
+    def changed(self, keys) -> bool:
         """After ``params.update()`` of the parameters ``keys`` (Mitsuba passes the names
-        that changed; none: all): check the textures among them, rebuild, or restore the
-        previous values and raise if the new ones are refused."""
+        that changed; none: all): the fast path where it applies (:class:`FastUpdate`;
+        returns False: nothing else changed), else check the textures among them,
+        rebuild, or restore the previous values and raise if the new ones are refused
+        (returns True: the flags may have changed)."""
+        if keys and self.fast.take(keys):
+            return False
         self.dirty = set(keys) if keys else None
+        for k, a in self.arrays.items():
+            if (not keys or k in keys) and self.flags[k] == self.mi.ParamFlags.Differentiable:
+                _dr().make_opaque(a)  # as Mitsuba's own plugins: a literal given is kernel data
         for k in [k for k in self.textures if k in keys or not keys]:  # the textures that changed
             try:
                 self.known[k] = self._check_texture(k)
@@ -410,6 +451,7 @@ class ParamState:
             for k, a in self.accepted.items():
                 self.mi.set_property(self.arrays[k], type(self.arrays[k])(a))
             raise ValueError(f"{err} (params.update() refused; the previous values are kept)") from None
+        return True
 
     # -- the values the hooks receive --------------------------------------------------
     def p(self, si):
@@ -418,7 +460,7 @@ class ParamState:
         swaps its colours), clamped to the range where it is not known; the
         traversed arrays as they are (so derivatives flow); derived values."""
         mi, dr = self.mi, _dr()
-        vals = dict(self.model.params)
+        vals = dict(self._model.params)
         for name, a in self.arrays.items():
             if self.flags[name] == mi.ParamFlags.Differentiable:
                 vals[name] = a
@@ -434,9 +476,21 @@ class ParamState:
         return ns
 
     def q(self, si):
-        """The sampling parameters at ``si`` (channel means; per point where the
-        sampler is array-safe, the model's constants otherwise)."""
+        """The sampling parameters at ``si`` (channel means, detached; per point where
+        the sampler is array-safe, the model's constants otherwise): the traversed
+        numbers and constant textures of :attr:`q_opaque` as they are now (kernel data,
+        not literals), varying textures at ``si``."""
+        dr = _dr()
         vals = dict(self.q_const)
+        for k in self.q_opaque:
+            if k in self.arrays:
+                vals[k] = dr.detach(self.arrays[k])
+                continue
+            v = channel_mean(dr.detach(self.textures[k].eval(si)))
+            if not self.known[k]:
+                prm = self.info.param(k)
+                v = dr.clip(v, max(prm.lo, -1e30), min(prm.hi, 1e30))
+            vals[k] = v
         for k in self.q_varying:
             v = channel_mean(self.textures[k].eval(si))
             if not self.known[k]:
@@ -444,6 +498,130 @@ class ParamState:
                 v = _dr().clip(v, max(prm.lo, -1e30), min(prm.hi, 1e30))
             vals[k] = v
         return SimpleNamespace(**vals)
+
+
+class FastUpdate:
+    """The fast path of ``params.update()`` (issue 43): a new value that is kernel data
+    only, taken in a few microseconds, without a NumPy model, ``mi.traverse`` or a new
+    Dr.Jit object, so that an update costs what a built-in's does (``roughplastic``'s
+    colour: 12 us; docs/benchmarks.md).
+
+    What may take it (``names``): the traversed differentiable numbers and the constant
+    textures (``<rgb>``, :func:`props.constant_reader`) whose sampling constants the
+    hooks read as they are (:attr:`ParamState.q_opaque`), of a model whose traced code
+    depends on its values only through ``p`` and ``q`` (the contract of
+    :mod:`plausible.kernel_params`; :meth:`~plausible.bxdf.BxDF.for_changing_data`
+    returns the model itself: He-Torrance's copy that sums every term does), unless the
+    model has constraints between parameters and textures checked point by point.
+
+    An update takes it (:meth:`take`) when every new value lies in its range (a colour:
+    every channel, its texture in range before), no colour becomes or stops being zero,
+    a scalar cannot change the ``Anisotropic`` flag (the model is isotropic at a generic
+    point of its scalars, so at every one; or the flag is set already, and stays set),
+    and the model's constraints hold (:meth:`~plausible.bxdf.BxDF.check_constraints`).
+    Anything else takes the full path of :meth:`ParamState.changed`, which gives the
+    errors, warnings and clamping."""
+
+    def __init__(self, state):
+        self.state = state
+        model, F = state.hooks, state.mi.ParamFlags
+        data_only = model.for_changing_data() is model
+        pointwise = P.has_constraints(state.info) and any(state.known[k] for k in state.varying)
+        readers = {k: P.constant_reader(state.mi, state.textures[k]) for k in state.q_opaque
+                   if k in state.textures}
+        self.readers = {k: r for k, r in readers.items() if r is not None}
+        numbers = {k for k in state.q_opaque if k in state.arrays and state.flags[k] == F.Differentiable}
+        self.names = frozenset(numbers | set(self.readers)) if data_only and not pointwise else frozenset()
+        params = {k: state.info.param(k) for k in self.names}
+        self.ranges = {k: (prm.lo, prm.hi) for k, prm in params.items()}
+        self.colors = {k for k, prm in params.items() if prm.is_color}
+        self.scalars = self.names - self.colors
+        self.constrained = P.has_constraints(state.info)
+        self.aniso = state.mi.BSDFFlags.Anisotropic
+        self.make_opaque = _dr().make_opaque
+        self.iso_free = bool(self.scalars) and self._isotropic_anywhere()
+        self._sync()
+
+    def _sync(self):
+        """After a model was built: whether each colour is zero now (the isotropy
+        probe's key, :meth:`ParamState._isotropic`)."""
+        model = self.state.hooks
+        self.seen = model
+        self.zero = {k: bool(np.all(np.asarray(model.params[k]) == 0)) for k in self.colors}
+
+    def _isotropic_anywhere(self) -> bool:
+        """Is the model isotropic at a generic point of its scalars (each moved by its own
+        factor inside its range)?  Then no value of them makes it anisotropic."""
+        model = self.state.hooks
+        moved = {}
+        for i, k in enumerate(sorted(self.scalars)):
+            (lo, hi), v = self.ranges[k], float(model.params[k])
+            moved[k] = min(max(v * (1.137 + 0.211 * i) + 0.013 * (i + 1), lo), hi)
+        try:
+            return is_isotropic(model) and is_isotropic(model.replace(**moved))
+        except ValueError:
+            return False
+
+    def take(self, keys) -> bool:
+        """Take the new values of ``keys`` if all may (see the class); True if taken.
+        Written for the fewest Python calls (a dozen; the count is what
+        ``tests/mitsuba/test_update_cost.py`` holds against a built-in's)."""
+        st = self.state
+        if not self.names.issuperset(keys):
+            return False
+        if st._model is not self.seen:
+            self._sync()
+        new, images = {}, {}
+        for k in keys:
+            lo, hi = self.ranges[k]
+            if k in self.readers:
+                if not st.known[k]:
+                    return False  # clamped before: the full path checks it again
+                c = self.readers[k]()
+                for x in c:
+                    if not lo <= x <= hi:  # outside, or NaN: the full path warns or refuses
+                        return False
+                v = sum(c) / len(c)
+            else:
+                v = st.arrays[k][0]
+                if not lo <= v <= hi:
+                    return False
+                images[k] = v
+            if k in self.colors:
+                if (v == 0) != self.zero[k]:
+                    return False
+            elif not (self.iso_free or st.m_flags & self.aniso):
+                return False
+            new[k] = v
+        if self.constrained and not self._constraints_hold(new):
+            return False
+        for k, v in images.items():
+            st.exact[k] = (v, np.array((v,), dtype=np.float32))
+            st.accepted[k] = st.exact[k][1]
+            self.make_opaque(st.arrays[k])  # a literal given (mi.Float(0.4)) is kernel data too
+        for k in self.colors.intersection(new):
+            self.zero[k] = new[k] == 0
+            if k in self.readers:
+                st.means[k] = new[k]
+        st.pending.update(new)
+        return True
+
+    def _constraints_hold(self, new) -> bool:
+        """The model's constraints between parameters at the new values: checked on the
+        values alone (:meth:`~plausible.bxdf.BxDF.check_constraints`), or by building the
+        model where one of its values is derived from others (Neumann's ``c``)."""
+        st = self.state
+        values = dict(st._model._params)
+        values.update(st.pending)
+        values.update(new)
+        try:
+            if st.derived:
+                st.make(**{k: v for k, v in values.items() if k not in st.derived})
+            else:
+                type(st._model).check_constraints(values)
+        except ValueError:
+            return False  # the full path refuses the value with the model's own message
+        return True
 
 
 def _dr():
@@ -496,7 +674,7 @@ def _lobe_methods(mi, dr):
             ops = drjit_ops(mi.Float)
             wi_c = self._split(si.wi)
             light, view = (wi_c, wo_c) if ctx.mode == mi.TransportMode.Importance else (wo_c, wi_c)
-            f = mixture_f(ops, self.model, light, view, self.state.p(si), enabled, components=True)
+            f = mixture_f(ops, self.state.hooks, light, view, self.state.p(si), enabled, components=True)
             return self._unpolarized(f) * dr.maximum(wo_c[2], 0.0)
 
     return PlausibleLobes
@@ -518,7 +696,7 @@ def _interface_methods(mi, dr, base):
 
         def _pdf(self, ctx, si, wo_c, q, enabled):
             ops = drjit_ops(mi.Float)
-            return mi.Float(mixture_pdf(ops, self.model, self._split(si.wi), wo_c, q, enabled, components=True))
+            return mi.Float(mixture_pdf(ops, self.state.hooks, self._split(si.wi), wo_c, q, enabled, components=True))
 
         def pdf(self, ctx, si, wo, active=True):
             enabled = self._enabled(ctx)
@@ -538,7 +716,7 @@ def _interface_methods(mi, dr, base):
                 return bs, self._spectrum(dr.zeros(mi.Float, dr.width(sample1)))
             q = self.state.q(si)
             wi_c = self._split(si.wi)
-            wo_c, k = mixture_sample(ops, self.model, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q, enabled,
+            wo_c, k = mixture_sample(ops, self.state.hooks, wi_c, (mi.Float(sample1), sample2.x, sample2.y), q, enabled,
                                      components=True)
             # by division: the stored wo is the wo its pdf sees (vec.normalize, CUDA's contraction)
             wo_c = vec.normalize(ops, tuple(mi.Float(c) for c in wo_c), divide=True)
@@ -566,7 +744,7 @@ def _interface_methods(mi, dr, base):
             side.  A model without a diffuse lobe: Mitsuba's default,
             ``pi eval(wo = n)``, as ``roughconductor`` (0 on a back face)."""
             ops = drjit_ops(mi.Float)
-            albedos = [lb.albedo for lb in self.model.components() if lb.albedo is not None]
+            albedos = [lb.albedo for lb in self.state.hooks.components() if lb.albedo is not None]
             if not albedos:
                 n = mi.Vector3f(0.0, 0.0, 1.0)
                 return self.eval(mi.BSDFContext(), si, n, active) * dr.pi
@@ -627,8 +805,8 @@ def make_plugin_class(plugin: str, model_name: str, info=None):
                 callback.put(k, a, self.state.flags[k])
 
         def parameters_changed(self, keys=()):
-            self.state.changed(list(keys))
-            self._set_flags()
+            if self.state.changed(keys):
+                self._set_flags()
 
         def to_string(self):
             return f"{plugin}[plausible model {model_name!r}: {self.state.describe()}]"
@@ -674,4 +852,4 @@ def make_merl_class():
 
 
 __all__ = ["make_plugin_class", "make_merl_class", "bsdf_flags", "lobe_types", "lobe_kinds", "array_safe", "traversable", "untraverse",
-           "channel_mean", "mitsuba_progress", "ParamState"]
+           "channel_mean", "mitsuba_progress", "ParamState", "FastUpdate"]

@@ -385,6 +385,45 @@ def texture_mean(tex):
         return None
 
 
+#: Constant textures whose one traversed value is what ``eval`` returns (RGB and
+#: monochrome variants): :func:`constant_reader` reads them without ``mi.traverse``.
+CONSTANT_TEXTURES = ("SRGBReflectanceSpectrum", "UniformSpectrum")
+
+
+def constant_reader(mi, tex):
+    """A function returning the channels of a constant texture (``<rgb>``, ``<float>``)
+    as Python floats, reading its traversed ``value`` where it lives now (about 1 us;
+    ``mi.traverse`` of the texture takes 12 us), or None for any other texture and in
+    spectral variants (a colour holds spectral coefficients there)."""
+    import drjit as dr
+
+    if mi.is_spectral or texture_class(tex) not in CONSTANT_TEXTURES:
+        return None
+    params = mi.traverse(tex)
+    if list(params.keys()) != ["value"]:
+        return None
+    ptr, cpptype, node, _ = params.properties["value"]
+    jit = dr.is_jit_v(mi.Float)
+
+    def get():
+        return mi.get_property(ptr, cpptype, node) if cpptype is not None else ptr
+
+    depth, size = dr.depth_v(get()), dr.size_v(get())
+    if jit and depth == 2 and size == 3:  # Color3f: the common case, without a loop
+        def read() -> tuple:
+            v = mi.get_property(ptr, cpptype, node) if cpptype is not None else ptr
+            return v[0][0], v[1][0], v[2][0]
+    elif jit:
+        def read() -> tuple:
+            v = get()
+            return tuple(c[0] for c in v) if depth > 1 else (v[0],)
+    else:
+        def read() -> tuple:
+            v = get()
+            return tuple(float(x) for x in v) if depth else (float(v),)
+    return read
+
+
 def texture_varies(tex) -> bool:
     """Does the texture vary over a surface?  ``is_spatially_varying()``, and
     also every texture without a mean: Mitsuba 3.9's ``mesh_attribute`` says
@@ -589,5 +628,5 @@ __all__ = ["COMMON_ALIASES", "PLUGIN_ALIASES", "KNOWN_TEXTURES", "aliases_for", 
            "texture_range_known", "texture_mean", "texture_varies", "srgb_to_linear",
            "bitmap_values", "bitmap_is_raw", "check_texture", "TextureRange", "range_warning", "spectral_texels",
            "SPECTRAL_CHECK_NM", "uv_grid", "values_at_uv", "check_pointwise",
-           "has_constraints",
+           "has_constraints", "CONSTANT_TEXTURES", "constant_reader",
            "PointValues"]

@@ -52,6 +52,7 @@ weights of the terms, so that no rough-surface approximation is needed.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -346,18 +347,37 @@ class HeTorrance(BxDF):
         (GLSL) forms of a model thus sum the same terms; an exported shader whose
         ``sigma0`` uniform is raised above the model's, or its wavelength lowered,
         sums too few (export the model with the new values)."""
-        if _varying(p.sigma0):
+        if _varying(p.sigma0) or not self.terms_from_values:
             return None
         return g_bound(self.params["sigma0"], self.params["wavelength"])
 
+    #: Does :meth:`bound` read the model's own values (False: every term, the copy
+    #: :meth:`for_changing_data` makes)?
+    terms_from_values = True
+
     def _structure(self):
         """The kernel's structure (:mod:`plausible.kernel_params`) includes the number of
-        terms, which the parameters' values choose (:meth:`bound`, :func:`exact_terms`),
-        and the reference wavelength of ``rough="beckmann"``."""
+        terms, which the parameters' values choose (:meth:`bound`, :func:`exact_terms`;
+        ``None``: every term), and the reference wavelength of ``rough="beckmann"``."""
         from .. import kernel_params
 
-        return (kernel_params.default_structure(self), exact_terms(self.bound(self.p) or 0.0),
+        b = self.bound(self.p)
+        return (kernel_params.default_structure(self), None if b is None else exact_terms(b),
                 float(np.max(self.params["wavelength"])))
+
+    def for_changing_data(self):
+        """A copy that sums every term of the series (:meth:`bound` None, as for a
+        per-lane ``sigma0``), so that a new ``sigma0`` or ``wavelength`` compiles
+        nothing (the Mitsuba plugin, issue 43); its evaluation costs about 1.9x the
+        model's at the default values (docs/benchmarks.md).  None for ``rough="beckmann"``,
+        whose reference wavelength is a number in the code."""
+        if not self.terms_from_values:
+            return self
+        if self.params["rough"] == "beckmann":
+            return None
+        out = copy.copy(self)
+        out.terms_from_values = False
+        return out
 
     def _glossy(self, ops, wi, wo, p):
         """The directional-diffuse term (eq. 76)."""

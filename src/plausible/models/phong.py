@@ -132,7 +132,7 @@ class ModifiedPhong(BxDF):
 
     def _validate(self):
         total = np.asarray(self.params["kd"]) + np.asarray(self.params["ks"])
-        if np.any(total > 1.0 + 1e-12):
+        if (total > 1.0 + 1e-12).any():
             raise ValueError("ModifiedPhong: parameters 'kd' + 'ks' must not exceed 1 "
                              f"(energy conservation), got kd + ks = {fmt(total)}")
 
