@@ -39,12 +39,16 @@ def _family(name, **fixed):
 
 
 def _affine_gap(probe, fam, point, seed=0):
-    """Largest |Mitsuba - (B0 + sum x_j B_j)| at random colours, relative to the largest value."""
-    F, _ = CM._basis_now(probe, fam, point)
+    """Largest |Mitsuba - (B0 + sum x_j B_j)| at random colours, relative to the largest value, on the
+    pairs and on the highlight strip's pairs (the bases of the predicted highlight)."""
+    F, _, H = CM._basis_now(probe, fam, point)
     x = np.random.default_rng(seed).uniform(0.1, 0.9, size=len(fam.slots))
-    got = probe.measure(CM._load(fam.bsdf_dict(point, dict(zip(fam.slots, x)))))[0][:, 0]
-    want = F[0] + x @ F[1:]
-    return float(np.max(np.abs(got - want)) / np.max(np.abs(want)))
+    got = probe.measure_all(CM._load(fam.bsdf_dict(point, dict(zip(fam.slots, x)))))
+    gap = 0.0
+    for g, B in ((got[0][:, 0], F), (got[2][:, 0], H)):
+        want = B[0] + x @ B[1:]
+        gap = max(gap, float(np.max(np.abs(g - want)) / np.max(np.abs(want))))
+    return gap
 
 
 @pytest.mark.parametrize("name, point", [("roughconductor", {"alpha": 0.2}), ("roughplastic", {"alpha": 0.3}),

@@ -538,7 +538,7 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     d, bakes = _with_textures(r.dict, family, textures, notes, warn)
     tgt_alb = CM.sampler_albedo(r.dict)
     alb = _albedo_report(src_alb, tgt_alb)
-    warn = warn + _albedo_warnings(alb)
+    warn = warn + _albedo_warnings(alb) + _trade_warning(r, alb, family)
     if family in CM.PLAUSIBLE_TYPES:
         from .. import registry
 
@@ -764,6 +764,25 @@ def _albedo_warnings(alb):
     return ["the target's albedo differs from the source's by more than "
             f"{TOLERANCE} at " + ", ".join(one(t, v) for t, v in bad)
             + ": the target family cannot follow the source's albedo curve"] + out
+
+
+def _trade_warning(r, alb, family) -> list:
+    """One warning where the fitted target ``r`` (a :class:`.mitsuba.FamilyFit`) keeps its predicted
+    highlight (:attr:`.mitsuba.FamilyFit.peak_ratios`) outside compare_looks' band at some light angle:
+    the family cannot hold the source's albedo (the fit's constraint, :data:`TOLERANCE` at 0/45/75 deg)
+    and its highlight together, and the warning says which is kept and which lost or invented."""
+    from ..mitsuba.looks import HIGHLIGHT_BAND, LIGHT_ANGLES
+
+    lo, hi = HIGHLIGHT_BAND
+    bad = [(a, q) for a, q in zip(LIGHT_ANGLES, r.peak_ratios) if not lo <= q <= hi]
+    if not bad:
+        return []
+    kept = all(v["max_abs_difference"] <= TOLERANCE for v in alb.values())
+    what = ", ".join(f"{'lost' if q < lo else 'invented'} at {a:g} deg ({q:.3g}x the source's)" for a, q in bad)
+    return [(f"highlight traded for the albedo: {family} cannot hold both; the albedo kept (within {TOLERANCE} "
+             f"at 0/45/75 deg), the highlight " if kept else
+             f"highlight and albedo both missed: {family} cannot hold either; the highlight ") + what
+            + " (predicted from the fit's bases; compare_looks renders it)"]
 
 
 def _to_model(src, name, metric, starts, src_alb, warn):

@@ -419,9 +419,11 @@ class LampStrip:
             t /= np.linalg.norm(t, axis=1)[:, None]
             b = np.cross(n, t)
             frame = np.stack([t, b, n], 1)                       # rows: the local axes at each point
-            WO.append(frame @ v)
-            WI.append(np.einsum("pij,pj->pi", frame, L))
-            layout.append((pix, len(pix)))
+            wo, wi = frame @ v, np.einsum("pij,pj->pi", frame, L)
+            lit = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)          # the lamp below a point's horizon: 0
+            WO.append(wo[lit])
+            WI.append(wi[lit])
+            layout.append((pix[lit], int(lit.sum())))
         weight = IRRADIANCE / (math.pi * math.sin(math.radians(LAMP_DEG)) ** 2) * 2.0 * math.pi * (1.0 - cos_a) / points
         return cls(tuple(angles), res, np.concatenate(WI), np.concatenate(WO), layout, weight, rows)
 
