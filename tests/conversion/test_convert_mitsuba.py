@@ -44,9 +44,10 @@ def _affine_gap(probe, fam, point, seed=0):
     F, _, H = CM._basis_now(probe, fam, point)
     x = np.random.default_rng(seed).uniform(0.1, 0.9, size=len(fam.slots))
     got = probe.measure_all(CM._load(fam.bsdf_dict(point, dict(zip(fam.slots, x)))))
+    images = np.stack(probe.strip.images(got[2][:, :1]))[..., 0]          # (views, rows, res)
     gap = 0.0
-    for g, B in ((got[0][:, 0], F), (got[2][:, 0], H)):
-        want = B[0] + x @ B[1:]
+    for g, B in ((got[0][:, 0], F), (images, H)):
+        want = B[0] + np.tensordot(x, B[1:], 1)
         gap = max(gap, float(np.max(np.abs(g - want)) / np.max(np.abs(want))))
     return gap
 

@@ -299,7 +299,8 @@ _PROBES: dict = {}
 def _basis_now(probe: Probe, family: Family, point: dict):
     """``(F, Alb, H)``: rows ``B_0`` (zero without an offset) and ``B_j``, channel 0 of
     Mitsuba's value at white / zero slots (RGB variants treat channels alike), on the pairs
-    (``f cos``), as albedos, and on the highlight strip's pairs (``f``, :attr:`Probe.strip`)."""
+    (``f cos``), as albedos, and as the highlight strip's images (``H``: (1 + J, views, rows, res),
+    :attr:`Probe.strip`)."""
     if family.parts:
         w = float(point["weight"])
         parts = []
@@ -318,7 +319,8 @@ def _basis_now(probe: Probe, family: Family, point: dict):
         Fs.append(F[:, 0] - F0)
         As.append(A[:, 0] - A0)
         Hs.append(H[:, 0] - H0)
-    return np.array(Fs), np.array(As), np.array(Hs)
+    # the strip's values as its images (linear in f): a blend's, a candidate's images are sums of these
+    return np.array(Fs), np.array(As), np.moveaxis(np.stack(probe.strip.images(np.array(Hs).T)), -1, 0)
 
 
 def basis(probe: Probe, family: Family, point: dict):
@@ -376,23 +378,23 @@ PEAK_BAND, PEAK_WEIGHT = 1.35, 100.0
 
 
 class Highlight:
-    """The predicted highlight of a family at one point of its axes against the source's: ``H``, the
-    bases on the strip's pairs (:func:`basis`), ``peaks`` the source's (one per light angle).
+    """The predicted highlight of a family at one point of its axes against the source's: ``images``, the
+    bases' strip images (:func:`basis`), ``peaks`` the source's (one per light angle).
     :meth:`ratios` of colours ``x`` (J, C); :meth:`excess` the log ratios beyond :data:`PEAK_BAND`
     (signed, 0 inside); :meth:`cost` ``PEAK_WEIGHT sum excess^2``.  :meth:`channel` is the same of one
     channel's colours, the others held (the per-channel polish)."""
 
-    def __init__(self, strip, H, peaks, x=None, c=None, images=None):
+    def __init__(self, images, peaks, x=None, c=None):
         from ..spectra import LUMINANCE_WEIGHTS
 
-        self.strip, self.peaks, self.x, self.c = strip, np.asarray(peaks, float), x, c
-        #: each basis row's strip images (1 + J, views, rows, res): a candidate's luminance image is
-        #: ``sum(w) B_0 + sum_j (w . x_j) B_j`` (the render is linear in f; ``w`` the luminance weights)
-        self.images = images if images is not None else np.moveaxis(np.stack(strip.images(H.T)), -1, 0)
+        self.peaks, self.x, self.c = np.asarray(peaks, float), x, c
+        #: each basis row's strip images (1 + J, views, rows, res; :func:`basis`): a candidate's luminance
+        #: image is ``sum(w) B_0 + sum_j (w . x_j) B_j`` (the render is linear in f; ``w`` the luminance weights)
+        self.images = images
         self.w = np.asarray(LUMINANCE_WEIGHTS, float)
 
     def channel(self, x, c):
-        return Highlight(self.strip, None, self.peaks, x, c, self.images)
+        return Highlight(self.images, self.peaks, x, c)
 
     def ratios(self, x):
         x = np.asarray(x, float)
@@ -624,7 +626,7 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
         count[0] += 1
         F, Alb, H = basis(probe, fam, point)
         x = _lsq(F, Alb, g, A, eps, metric, rows if hard else None)
-        return _figure(metric, F, Alb, x, g, A, eps, rows, hard, Highlight(probe.strip, H, peaks))[0], x
+        return _figure(metric, F, Alb, x, g, A, eps, rows, hard, Highlight(H, peaks))[0], x
 
     # 2. scan
     grid = [dict(zip([a.name for a in fam.axes], vals))
@@ -644,7 +646,7 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
         if r.fun < here:
             best[ax.name] = ax.inv(float(r.x))
     F, Alb, H = basis(probe, fam, best)
-    hl = Highlight(probe.strip, H, peaks)
+    hl = Highlight(H, peaks)
     # 4. polish the colours
     x = _polish(F, Alb, _lsq(F, Alb, g, A, eps, metric, rows if hard else None), g, A, eps, metric, rows, hard, hl)
     figure = _figure(metric, F, Alb, x, g, A, eps, rows, hard, hl)[0]
