@@ -564,7 +564,7 @@ def _choose(src, metric, probe, target, src_alb, notes):
     if r.key in CM.BAND_FAMILIES and others:
         # kept only where the band needs it or the metric's own figure is lower too
         o = min(others, key=lambda x: x.figure)
-        if o.band <= CM.BAND_HARD and o.errors[metric] <= r.errors[metric]:
+        if o.band <= CM.BAND_KEEP and o.errors[metric] <= r.errors[metric]:
             tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
                       f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
             r = o

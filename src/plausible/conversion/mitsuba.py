@@ -361,6 +361,10 @@ BAND, BAND_WEIGHT = 0.02, 50.0
 #: ends on the band's edge, and the probe's albedo of ``blendbsdf-tir`` is up to 7e-3 from Mitsuba's
 #: sampler (chrome@ngan2005/blinn-phong: 0.045 by the probe, 0.052 by the sampler at 0.045).
 BAND_HARD, HARD_WEIGHT = 0.04, 1e5
+#: A family other than :data:`BAND_FAMILIES` within this of the source's albedo (the probe's) is kept over the
+#: coat's blend where its metric's figure is lower too (:func:`plausible.conversion.convert`'s choice): the
+#: Done-when's 0.05 less the probe's largest difference from Mitsuba's sampler.
+BAND_KEEP = 0.045
 
 
 def _band(a, A, rows, hard=False):
