@@ -39,12 +39,17 @@ def _family(name, **fixed):
 
 
 def _affine_gap(probe, fam, point, seed=0):
-    """Largest |Mitsuba - (B0 + sum x_j B_j)| at random colours, relative to the largest value."""
-    F, _ = CM._basis_now(probe, fam, point)
+    """Largest |Mitsuba - (B0 + sum x_j B_j)| at random colours, relative to the largest value, on the
+    pairs and on the highlight strip's pairs (the bases of the predicted highlight)."""
+    F, _, H = CM._basis_now(probe, fam, point)
     x = np.random.default_rng(seed).uniform(0.1, 0.9, size=len(fam.slots))
-    got = probe.measure(CM._load(fam.bsdf_dict(point, dict(zip(fam.slots, x)))))[0][:, 0]
-    want = F[0] + x @ F[1:]
-    return float(np.max(np.abs(got - want)) / np.max(np.abs(want)))
+    got = probe.measure_all(CM._load(fam.bsdf_dict(point, dict(zip(fam.slots, x)))))
+    images = np.stack(probe.strip.images(got[2][:, :1]))[..., 0]          # (views, rows, res)
+    gap = 0.0
+    for g, B in ((got[0][:, 0], F), (images, H)):
+        want = B[0] + np.tensordot(x, B[1:], 1)
+        gap = max(gap, float(np.max(np.abs(g - want)) / np.max(np.abs(want))))
+    return gap
 
 
 @pytest.mark.parametrize("name, point", [("roughconductor", {"alpha": 0.2}), ("roughplastic", {"alpha": 0.3}),
@@ -426,9 +431,14 @@ def test_textures_go_to_the_coats_base_and_the_lobe_of_blendbsdf_tir(tmp_path):
 def test_the_coats_blend_is_not_kept_where_another_family_meets_the_band_with_a_lower_figure():
     # pearl-paint@ngan2005/ward falls by 0.09 (a candidate for the coat's blend, whose figure minimised is
     # lower, 1.2 against 2.1), but blendbsdf meets the band (0.042) with the lower perceptual figure
+    # (issue 40: every family is now fitted with the band as a constraint, 0.04; the rule, as the
+    # conversion applies it to the two fits it makes: the blend is kept over the coat's exactly when it is
+    # within BAND_KEEP and of the lower perceptual figure)
     spec = "material:pearl-paint@ngan2005/ward"
-    c = convert(spec).items[0]
-    assert c.params["bsdf_0"]["type"] == "diffuse" and any("blendbsdf kept" in n for n in c.notes)
-    tir = CM.fit_family(plausible.make(spec), "blendbsdf-tir")
-    assert tir.figure < CM.fit_family(plausible.make(spec), "blendbsdf").figure
-    assert c.errors["perceptual"] < tir.errors["perceptual"] and albedo_check(plausible.make(spec), c.params)[0]
+    c = convert(spec, looks=False).items[0]
+    tir = CM.fit_family(plausible.make(spec), "blendbsdf-tir", hard=True)
+    plain = CM.fit_family(plausible.make(spec), "blendbsdf", hard=True)
+    assert tir.figure < plain.figure
+    kept = plain.band <= CM.BAND_KEEP and plain.errors["perceptual"] <= tir.errors["perceptual"]
+    assert (c.params["bsdf_0"]["type"] == "diffuse") == kept == any("blendbsdf kept" in n for n in c.notes)
+    assert albedo_check(plausible.make(spec), c.params)[0]

@@ -3,6 +3,7 @@ line ignored, done rows skipped), round robin over the fit sets, and its summary
 
 import json
 
+import numpy as np
 import pytest
 
 from plausible.conversion import table
@@ -223,3 +224,31 @@ def test_the_command_refuses_out_dash_and_names_a_scheduler_it_cannot_reach(tmp_
     r = CliRunner().invoke(main, ["convert-table", "--out", "t.jsonl", "--fits", "ngan2005/ward", "--per-set", "1",
                                   "--scheduler", "tcp://127.0.0.1:1"])
     assert r.exit_code == 2 and "--scheduler: cannot reach the Dask scheduler" in r.output, r.output
+
+
+def _looked(name, ratios, warned=True):
+    from plausible.mitsuba.looks import HIGHLIGHT_BAND, LIGHT_ANGLES, _warnings
+
+    words = _warnings(ratios, LIGHT_ANGLES, *HIGHLIGHT_BAND) if warned else []
+    worst = max(ratios, key=lambda r: abs(np.log(r)))
+    return {**_fake_row(("gltf", "s", name)), "flip": 0.2, "highlight_ratio": worst,
+            "highlight_ratios": list(ratios), "looks_warnings": words}
+
+
+def test_every_row_outside_the_highlight_band_shows_its_warning_in_the_table():
+    """Issue 40: a conversion whose highlight is lost (0.364x at 0 deg) or invented (25.9x at 150 deg)
+    carries the warning compare_looks wrote, in its row of the table; one inside the band shows none."""
+    rows = [_looked("bronze", [0.364, 0.8, 1.2, 25.9]), _looked("fine", [1.0, 0.9, 1.1, 1.3])]
+    md = table.markdown({table.key(r): r for r in rows})
+    line = next(x for x in md.splitlines() if "| bronze |" in x)
+    assert "lost 0.364x at 0 deg" in line and "invented 25.9x at 150 deg" in line
+    assert "| x1.3 | - |" in next(x for x in md.splitlines() if "| fine |" in x)
+    assert table.unwarned(rows) == [] and "without their warning" not in md
+
+
+def test_a_row_outside_the_band_without_its_warning_is_caught():
+    """The check fails a row whose ratio is out of the band and whose warnings do not say so."""
+    silent = _looked("bronze", [0.364, 0.8, 1.2, 1.0], warned=False)
+    wrong = {**_looked("nickel", [2.0, 1.0, 1.0, 1.0]), "looks_warnings": ["highlight lost: 0.5x"]}
+    assert [k for k, _ in table.unwarned([silent, wrong])] == [table.key(silent), table.key(wrong)]
+    assert "without their warning" in table.markdown({table.key(silent): silent})

@@ -143,17 +143,19 @@ def test_scaled_form_is_the_paper_model_at_ks_1_and_scales_the_lobe():
 
 
 @pytest.mark.parametrize("spec", ["material:alum-bronze@ngan2005/ward", "material:nickel@ngan2005/ashikhmin-shirley"])
-def test_published_fits_converted_to_gltf_keep_their_highlight(spec):
+def test_published_fits_converted_to_gltf_keep_the_albedo_and_say_what_the_highlight_lost(spec):
     """The issue's case: these conversions to glTF were matte (peaks 0.011-0.018 of the source's
-    at 0 and 30 degrees, measured on 6bc24da).  Now the head-on highlight is within a factor 2;
-    the glTF lobe's albedo cannot follow these sources' at the same time (its Schlick rise at
-    grazing), and the conversion says so in its warnings."""
-    c = plausible.convert(spec, to="gltf")
+    at 0 and 30 degrees, measured on 6bc24da) without a word.  The glTF lobe cannot follow these
+    sources' albedo and highlight at once (its Schlick rise at grazing); the albedo is the constraint
+    (within 0.05 at 0/45/75 deg), and where the head-on highlight (the independent peak above) is
+    off by more than a factor 2, the conversion says it traded the highlight at 0 deg away."""
+    c = plausible.convert(spec, to="gltf").items[0]
     src = plausible.registry.make_from_spec(spec)
-    q = np.array([peak(c.items[0].result, t) / peak(src, t) for t in (0.0, 30.0)])
-    assert np.all((q > 0.5) & (q < 2.0)), (q, c.items[0].params)
-    if c.items[0].albedo["0"]["max_abs_difference"] > 0.05:
-        assert any("albedo differs" in w for w in c.items[0].warnings)
+    assert max(v["max_abs_difference"] for v in c.albedo.values()) <= 0.05
+    q = peak(c.result, 0.0) / peak(src, 0.0)
+    if not 0.5 < q < 2.0:
+        (trade,) = [w for w in c.warnings if w.startswith("highlight traded for the albedo")]
+        assert ("lost at 0 deg" if q < 1 else "invented at 0 deg") in trade, (q, trade)
 
 
 def test_candidate_is_the_model_built_again_and_refuses_what_the_model_refuses():
@@ -169,3 +171,26 @@ def test_candidate_is_the_model_built_again_and_refuses_what_the_model_refuses()
         assert dict(got.params) == dict(plausible.make(name, **values).params)
     with pytest.raises(ValueError, match="kd"):
         FIT.candidate(plausible.make("modified-phong"), dict(kd=0.6, ks=0.6, n=12.0))
+
+
+def test_the_highlight_hold_is_an_argument_of_the_fit_not_module_state():
+    """Issue 40, item 4: ``fit(..., highlight=w)`` replaces the context manager that set a module
+    global.  Measured by the independent peak (``peak``, 3,581 directions): the default hold brings the
+    A-S fit's peak at 0 deg nearer the target's than ``highlight=0`` (the plain l2-cos, as the papers fit),
+    which in turn has the lower l2-cos figure; and one fit's weight does not leak into the next."""
+    target = plausible.make(GOLD)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plain = fit("ashikhmin-shirley", GOLD, "l2-cos", highlight=0.0)
+        held = fit("ashikhmin-shirley", GOLD, "l2-cos")
+        again = fit("ashikhmin-shirley", GOLD, "l2-cos", highlight=0.0)
+    off = [abs(math.log(peak(r.model, 0.0) / peak(target, 0.0))) for r in (plain, held)]
+    assert off[1] < off[0]
+    assert plain.errors["l2-cos"] < held.errors["l2-cos"]
+    assert again.params["nu"] == plain.params["nu"] and again.errors == plain.errors
+
+
+@pytest.mark.parametrize("bad", [-1.0, float("nan"), "heavy"])
+def test_a_bad_highlight_weight_is_refused_naming_it(bad):
+    with pytest.raises(ValueError, match="highlight must be"):
+        fit("lambertian", "lambertian:rd=0.5", "l2-cos", highlight=bad)

@@ -153,3 +153,31 @@ def test_the_adapter_of_a_mitsuba_bsdf_is_rendered_as_its_bsdf():
 
     looks = plausible.compare_looks(MitsubaBSDF(load_bsdf_dict(DIFFUSE_05)), DIFFUSE_05)
     assert looks.flip == 0.0 and looks.highlight_ratio == 1.0
+
+
+def test_the_lamp_strip_predicts_the_peak_of_a_whole_view_computed_apart():
+    """LampStrip (the middle rows, lamp and pixel footprint in one sum, half mirrored) against the NumPy
+    image of the whole view at pixel centres (_reference_peak) for a broad lobe: measured 0.2-1.3 % at
+    0/60/120 deg; at 150 deg the peak is on the limb, where pixel centres say all or nothing (the render
+    is 3.6 % from them, above)."""
+    model = make_from_spec("modified-phong:kd=0.2:ks=0.4:n=15")
+    got = L.LampStrip.make().of(model)
+    want = np.array([_reference_peak(model, a, L.RES) for a in L.LIGHT_ANGLES])
+    np.testing.assert_allclose(got[:3], want[:3], rtol=0.02)
+    np.testing.assert_allclose(got[3], want[3], rtol=0.06)
+
+
+@pytest.mark.parametrize("spec", ["material:chrome@ngan2005/ward", "material:nickel@ngan2005/ashikhmin-shirley"])
+def test_the_lamp_strip_predicts_the_rendered_peak_of_a_sharp_published_fit(spec):
+    """The sharpest of the issue's cases (chrome: a 64-point lamp put it 56 % off at 120 deg) and a
+    broad one: the predicted peak within 10 % of the render at all four angles, grazing included
+    (measured 1-7 %)."""
+    got = L.LampStrip.make().of(make_from_spec(spec))
+    np.testing.assert_allclose(got, L.render_looks(spec).peaks(), rtol=0.10)
+
+
+def test_a_lamp_strip_of_too_few_points_misses_the_sharp_peak():
+    """The check above can fail: 16 lamp points miss chrome's peak at 120 deg by more than 10 %."""
+    spec = "material:chrome@ngan2005/ward"
+    got = L.LampStrip.make(points=16).of(make_from_spec(spec))
+    assert np.max(np.abs(got / L.render_looks(spec).peaks() - 1.0)) > 0.10

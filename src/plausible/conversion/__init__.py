@@ -13,7 +13,7 @@ plausible models, and fits a *target* to each:
   (a ``blendbsdf`` of a roughconductor and a diffuse base under a coat of lower index
   than outside, whose albedo falls with incidence), ``principled`` per material, the
   best of the candidates (:func:`.mitsuba.candidates`) by the figure minimised --
-  refitted with the albedo band as a constraint where the best misses it -- or
+  each fitted with the albedo band as a constraint and the rendered highlight held second -- or
   ``"mitsuba:TYPE"`` forced; fitted through Mitsuba's own code (:func:`.mitsuba.fit_family`);
 * ``"gltf"``: the glTF 2.0 metallic-roughness material, the registered model
   ``gltf-pbr`` fitted the same way, written by :func:`plausible.export.gltf.write_gltf`
@@ -598,10 +598,9 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     elif family is None:
         r, family = _choose(src, metric, probe, target, src_alb, notes)
     else:
-        r = CM.fit_family(src.model, family, metric, probe=probe, target=target)
-        if r.band > CM.BAND_HARD:
-            r = CM.fit_family(src.model, family, metric, probe=probe, target=target, hard=True)
-            notes.append(f"fitted with the band as a constraint (the albedo beyond {CM.BAND_HARD} off without it)")
+        r = CM.fit_family(src.model, family, metric, probe=probe, target=target, hard=True)
+        notes.append(f"fitted with the albedo band as a constraint (within {CM.BAND_HARD} at 0/45/75 deg where "
+                     f"the family can), the highlight held second")
         if family == GLTF_MODEL:
             r = metallic_decision(src.model, r, metric, probe, target, notes)
     textures = dict(src.textures)
@@ -609,7 +608,7 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
     d, bakes = _with_textures(r.dict, family, textures, notes, warn)
     tgt_alb = CM.sampler_albedo(r.dict)
     alb = _albedo_report(src_alb, tgt_alb)
-    warn = warn + _albedo_warnings(alb)
+    warn = warn + _albedo_warnings(alb) + _trade_warning(r, alb, family)
     if family in CM.PLAUSIBLE_TYPES:
         from .. import registry
 
@@ -622,32 +621,26 @@ def _to_mitsuba(src, family, metric, src_alb, warn):
 
 def _choose(src, metric, probe, target, src_alb, notes):
     """``(fit, family)``: the best candidate (:func:`.mitsuba.candidates`) by the figure minimised, of
-    those that render what they evaluate to (:func:`degenerate`), refitted with the band as a
-    constraint where it misses the band; the choice noted."""
+    those that render what they evaluate to (:func:`degenerate`), each fitted with the albedo band as a
+    constraint (``hard``: one fit a family, issue 40; before, a fit without it and a refit with it where
+    the best missed the band); the choice noted."""
     from . import mitsuba as CM
 
     families, why = CM.candidates(src.model, src_alb)
-    fits = _usable([CM.fit_family(src.model, f, metric, probe=probe, target=target) for f in families],
+    fits = _usable([CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True) for f in families],
                    probe, notes)
     r = min(fits, key=lambda x: x.figure)
-    tried = ", ".join(f"{x.key} {x.figure:.3g}" for x in fits)
+    tried = ", ".join(f"{x.key} {x.figure:.3g} (albedo {x.band:.3f} off)" for x in fits)
     others = [x for x in fits if x.key not in CM.BAND_FAMILIES]
     if r.key in CM.BAND_FAMILIES and others:
         # kept only where the band needs it or the metric's own figure is lower too
         o = min(others, key=lambda x: x.figure)
-        if o.band <= CM.BAND_HARD and o.errors[metric] <= r.errors[metric]:
+        if o.band <= CM.BAND_KEEP and o.errors[metric] <= r.errors[metric]:
             tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
                       f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
             r = o
-    if r.band > CM.BAND_HARD:
-        # the band as a constraint of every candidate's fit, the lowest figure of those kept
-        hard = _usable([CM.fit_family(src.model, f, metric, probe=probe, target=target, hard=True)
-                        for f in families], probe, notes)
-        r = min(hard, key=lambda x: x.figure)
-        tried += (f"; the albedo {min(fits, key=lambda x: x.figure).band:.3f} off at most, beyond "
-                  f"{CM.BAND_HARD}: refitted with the band as a constraint: "
-                  + ", ".join(f"{x.key} {x.figure:.3g} (albedo {x.band:.3f} off)" for x in hard))
-    notes.append(f"mitsuba:{r.key} chosen: {why}; figure minimised: {tried}")
+    notes.append(f"mitsuba:{r.key} chosen: {why}; figure minimised (the albedo band as a constraint, within "
+                 f"{CM.BAND_HARD} at 0/45/75 deg where a family can, the highlight held second): {tried}")
     return r, r.key
 
 
@@ -835,6 +828,25 @@ def _albedo_warnings(alb):
     return ["the target's albedo differs from the source's by more than "
             f"{TOLERANCE} at " + ", ".join(one(t, v) for t, v in bad)
             + ": the target family cannot follow the source's albedo curve"] + out
+
+
+def _trade_warning(r, alb, family) -> list:
+    """One warning where the fitted target ``r`` (a :class:`.mitsuba.FamilyFit`) keeps its predicted
+    highlight (:attr:`.mitsuba.FamilyFit.peak_ratios`) outside compare_looks' band at some light angle:
+    the family cannot hold the source's albedo (the fit's constraint, :data:`TOLERANCE` at 0/45/75 deg)
+    and its highlight together, and the warning says which is kept and which lost or invented."""
+    from ..mitsuba.looks import HIGHLIGHT_BAND, LIGHT_ANGLES
+
+    lo, hi = HIGHLIGHT_BAND
+    bad = [(a, q) for a, q in zip(LIGHT_ANGLES, r.peak_ratios) if not lo <= q <= hi]
+    if not bad:
+        return []
+    kept = all(v["max_abs_difference"] <= TOLERANCE for v in alb.values())
+    what = ", ".join(f"{'lost' if q < lo else 'invented'} at {a:g} deg ({q:.3g}x the source's)" for a, q in bad)
+    return [(f"highlight traded for the albedo: {family} cannot hold both; the albedo kept (within {TOLERANCE} "
+             f"at 0/45/75 deg), the highlight " if kept else
+             f"highlight and albedo both missed: {family} cannot hold either; the highlight ") + what
+            + " (predicted from the fit's bases; compare_looks renders it)"]
 
 
 def _to_model(src, name, metric, starts, src_alb, warn):

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ISSUE_CASES", "TARGETS", "agreement", "convert_row", "distribution", "distribution_markdown", "family", "jobs", "key", "markdown", "read_rows", "run_table", "sample", "score_row", "summary", "target_of"]
+__all__ = ["ISSUE_CASES", "TARGETS", "agreement", "convert_row", "distribution", "distribution_markdown", "family", "jobs", "key", "markdown", "read_rows", "run_table", "sample", "score_row", "summary", "target_of",
+           "unwarned", "warning_cell"]
 
 #: The targets of the table.
 TARGETS = ("mitsuba", "gltf")
@@ -301,6 +302,10 @@ def markdown(rows: dict, tolerance: float | None = None) -> str:
     out = []
     for to in sorted(dict.fromkeys(r["to"] for r in good), key=lambda t: (TARGETS + (t,)).index(t)):
         out.append(_markdown([r for r in good if r["to"] == to], to, tol))
+    silent = unwarned(good)
+    if silent:
+        out.append("#### outside the highlight band without their warning\n\n"
+                   + "\n".join(f"* {k}: {why}" for k, why in silent) + "\n")
     failed = [r for r in rows.values() if "error" in r]
     if failed:
         out.append("#### failed conversions\n\n" + "\n".join(f"* {key(r)}: {r['error']}" for r in failed) + "\n")
@@ -323,6 +328,39 @@ def summary(rows, tol) -> list[dict]:
                         looked=len(looked), flip=float(np.median([r["flip"] for r in looked])) if looked else None,
                         off_band=sum(bool(r["looks_warnings"]) for r in looked)))
     return out
+
+
+def unwarned(rows, band=None) -> list[tuple[str, str]]:
+    """``[(key, why), ...]``: the rows with image scores whose highlight ratio at some light angle lies
+    outside ``band`` (default :data:`plausible.mitsuba.looks.HIGHLIGHT_BAND`) and whose
+    ``looks_warnings`` do not name it ("highlight lost"/"highlight invented" with that ratio, as
+    :func:`plausible.compare_looks` writes them).  Issue 40: every conversion outside the band carries
+    its warning; :func:`markdown` lists these rows under their own heading."""
+    from ..mitsuba.looks import HIGHLIGHT_BAND
+
+    lo, hi = HIGHLIGHT_BAND if band is None else band
+    out = []
+    for r in rows:
+        if "flip" not in r:
+            continue
+        said = " ".join(r.get("looks_warnings") or ())
+        for ratio in r.get("highlight_ratios") or [r["highlight_ratio"]]:
+            word = "lost" if ratio < lo else "invented" if ratio > hi else None
+            if word and not (f"highlight {word}" in said and f"{ratio:.3g}x" in said):
+                out.append((key(r), f"highlight {word} ({ratio:.3g}x) without its warning"))
+    return out
+
+
+def warning_cell(row) -> str:
+    """The table's cell of a row's looks warnings: ``lost 0.364x at 0 deg`` per ratio outside the band,
+    ``-`` for none (each taken from the row's ``looks_warnings``, as the conversion printed them)."""
+    import re
+
+    parts = []
+    for w in row.get("looks_warnings") or ():
+        m = re.match(r"highlight (lost|invented): the result's highlight under the light is (.*) \(band", w)
+        parts.append(f"{m.group(1)} " + m.group(2).replace(" the source's", "") if m else w)
+    return "; ".join(parts) or "-"
 
 
 def family(row) -> str:
@@ -350,8 +388,8 @@ def _markdown(rows, to, tol) -> str:
     pair = to == "gltf"
     lines += ["", f"#### every conversion to {to}", "",
               f"| fit set | material | target | perceptual | l2-cos | log | albedo diff. 0 / 45 / 75 deg | within {tol:g} | "
-              "FLIP | highlight | " + ("vs Mitsuba: FLIP / highlight | " if pair else "") + "seconds |",
-              "|---|---|---|---|---|---|---|---|---|---|" + ("---|" if pair else "") + "---|"]
+              "FLIP | highlight | looks warning | " + ("vs Mitsuba: FLIP / highlight | " if pair else "") + "seconds |",
+              "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if pair else "") + "---|"]
     for r in sorted(rows, key=lambda r: (r["fit"], r["material"])):
         ok = max(r["albedo_diff"]) <= tol
         agree = r.get("agreement") or {}
@@ -359,7 +397,8 @@ def _markdown(rows, to, tol) -> str:
         lines.append(f"| {r['fit']} | {r['material']} | {family(r)} | {r['perceptual']:.3g} | "
                      f"{r['l2']:.3g} | {r['log']:.3g} | " + " / ".join(f"{d:.3f}" for d in r["albedo_diff"])
                      + f" | {'yes' if ok else ('no' if r['conserving'] else 'no (source not conserving)')} | "
-                     f"{_cell(r.get('flip'))} | {_cell(r.get('highlight_ratio'), '.3g', 'x')} | {vs}{r['seconds']:.1f} |")
+                     f"{_cell(r.get('flip'))} | {_cell(r.get('highlight_ratio'), '.3g', 'x')} | "
+                     f"{warning_cell(r) if 'flip' in r else '-'} | {vs}{r['seconds']:.1f} |")
     return "\n".join(lines) + "\n"
 
 

@@ -978,14 +978,6 @@ def held_out(ctx, ref, fits, thetas_deg):
         "corresponds to the logarithmic characteristics of the human vision system.\u201d",
         model="neumann-metal", reference="cook-torrance:m=0.2:rs=0.9", thetas_deg=(0.0, 30.0, 60.0))
 def perceptual(ctx, model, reference, thetas_deg):
-    from plausible.fitting import metrics
-
-    # the paper's two metrics as they are: no highlight held (issue 40's addition to the fitter)
-    with metrics.highlight_weight(0.0):
-        _perceptual(ctx, model, reference, thetas_deg)
-
-
-def _perceptual(ctx, model, reference, thetas_deg):
     from plausible.fitting import as_target, fit
 
     ref = plausible.registry.make_from_spec(reference)
@@ -995,7 +987,8 @@ def _perceptual(ctx, model, reference, thetas_deg):
     ctx.steps(2)
     fits = {}
     for metric in ("l2-cos", "perceptual"):
-        fits[metric] = fit(model, tgt, metric, starts=1, seed=0, thetas_deg=thetas_deg)
+        # the paper's two metrics as they are: no highlight held (issue 40's addition to the fitter)
+        fits[metric] = fit(model, tgt, metric, starts=1, seed=0, thetas_deg=thetas_deg, highlight=0.0)
         ctx.tick()
     th = default_thetas(24 if not ctx.quick else 6)
     curves = {f"reference: {reference}": np.asarray(albedo_curve(ref, th).value)}

@@ -191,7 +191,7 @@ class FitResult:
 def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | None = None,
         starts: int = 4, seed: int = 0, time_limit: float | None = None, progress=None,
         thetas_deg=M.THETAS_DEG, target_albedo=None, maxiter: int = 200,
-        combine: str = "sum") -> FitResult:
+        combine: str = "sum", highlight: float = M.HIGHLIGHT_WEIGHT) -> FitResult:
     """Fit the registered model ``model_name`` to ``target`` under ``metric``.
 
     ``target``: see :func:`as_target`.  ``fixed``: parameters held at given values
@@ -201,7 +201,11 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     return the best point found (``timed_out`` is then True).  ``progress``: a
     :mod:`plausible.progress` factory, announced with the number of
     optimisations and ticked after each.  ``combine``: how the perceptual metric
-    joins its two maxima, ``"sum"`` (default) or ``"max"``.  ``thetas_deg``:
+    joins its two maxima, ``"sum"`` (default) or ``"max"``.  ``highlight``: the weight ``w >= 0``
+    of the highlight hold, ``w sum excess^2`` added to the figure minimised
+    (:func:`plausible.fitting.metrics.highlight_excess`; default
+    :data:`plausible.fitting.metrics.HIGHLIGHT_WEIGHT`, 0 the plain metrics as the papers fit them).
+    ``thetas_deg``:
     incidence angles of the samples and albedo terms for a model target;
     ``target_albedo = (thetas_deg, values)``: the albedo of a table target.
 
@@ -219,13 +223,19 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
 
     with threadpool_limits(limits=1, user_api="blas"):
         return _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg,
-                    target_albedo, maxiter, combine)
+                    target_albedo, maxiter, combine, highlight)
 
 
 def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg, target_albedo,
-         maxiter, combine):
+         maxiter, combine, highlight):
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
+    try:
+        highlight = float(highlight)
+    except (TypeError, ValueError):
+        raise ValueError(f"highlight must be a weight >= 0 (0: the plain metric), got {highlight!r}") from None
+    if not (math.isfinite(highlight) and highlight >= 0.0):
+        raise ValueError(f"highlight must be a finite weight >= 0 (0: the plain metric), got {highlight!r}")
     M.check_combine(combine)
     if starts < 1:
         raise ValueError(f"starts must be >= 1, got {starts}")
@@ -235,7 +245,7 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
     tgt = as_target(target, thetas_deg=thetas_deg, target_albedo=target_albedo)
     proto = info.cls(**fixed)
     problem = _Problem.make(info, proto, tgt, metric, combine, maxiter,
-                            None if time_limit is None else t0 + float(time_limit))
+                            None if time_limit is None else t0 + float(time_limit), highlight)
     # 1. free parameters; a parameter whose default is None resolves from the
     # others (neumann-metal's c): leave it out so that it follows them
     base = {k: v for k, v in proto.params.items() if k in fixed or info.param(k).default is not None}
@@ -505,14 +515,16 @@ class _Problem:
     values: _Values | None = None
     #: the target's highlight: its brightest pair per incidence (:func:`plausible.fitting.metrics.highlight_rows`)
     rows: np.ndarray | None = None
+    #: the weight of the highlight hold (:func:`fit`'s ``highlight``)
+    highlight: float = M.HIGHLIGHT_WEIGHT
 
     @classmethod
-    def make(cls, info, proto, tgt, metric, combine, maxiter, deadline):
+    def make(cls, info, proto, tgt, metric, combine, maxiter, deadline, highlight=M.HIGHLIGHT_WEIGHT):
         use_albedo = metric == "perceptual" and tgt.albedo is not None
         fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
         wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
         return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast),
-                   M.highlight_rows(wi, tgt.fcos))
+                   M.highlight_rows(wi, tgt.fcos), float(highlight))
 
 
 def _channel(g, c):
@@ -627,7 +639,7 @@ class _Objective:
         f, alb = values
         cc = _reduce(f, pb.tgt.wo, self.c)
         a = _reduce_alb(alb, self.c) if pb.fast else None
-        h = M.HIGHLIGHT_WEIGHT * float(np.sum(M.highlight_excess(cc, self.g, pb.rows, pb.eps) ** 2))
+        h = pb.highlight * float(np.sum(M.highlight_excess(cc, self.g, pb.rows, pb.eps) ** 2))
         if beta is None:
             return M.errors(cc, self.g, a, self.A, pb.eps, pb.combine)["perceptual"] + h
         return M.objective(pb.metric, cc, self.g, a, self.A, pb.eps, beta=beta, combine=pb.combine) + h
@@ -635,7 +647,7 @@ class _Objective:
     def _residuals(self, values) -> np.ndarray:
         """The residual vector of a least-squares metric (:data:`LEAST_SQUARES`), whose sum of
         squares is the figure squared plus the highlight's cost: ``(c - g) / |g|`` (``l2-cos``)
-        or ``ln((c + eps)/(g + eps)) / sqrt(N)`` (``log``), then ``sqrt(HIGHLIGHT_WEIGHT)`` times
+        or ``ln((c + eps)/(g + eps)) / sqrt(N)`` (``log``), then ``sqrt(highlight)`` (the fit's weight) times
         :func:`plausible.fitting.metrics.highlight_excess`."""
         pb = self.problem
         c, g = _reduce(values[0], pb.tgt.wo, self.c), self.g
@@ -644,7 +656,7 @@ class _Objective:
             r = (c - g) / math.sqrt(den) if den > 0 else c
         else:
             r = M._lr(c, g, pb.eps) / math.sqrt(c.size)
-        h = math.sqrt(M.HIGHLIGHT_WEIGHT) * M.highlight_excess(c, g, pb.rows, pb.eps)
+        h = math.sqrt(pb.highlight) * M.highlight_excess(c, g, pb.rows, pb.eps)
         return np.concatenate([r.reshape(-1), h])
 
     def residuals_many(self, xs) -> list:

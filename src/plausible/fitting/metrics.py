@@ -30,8 +30,6 @@ or the mean over samples *and* channels).
 
 from __future__ import annotations
 
-import contextlib
-
 import numpy as np
 
 METRICS = ("perceptual", "l2-cos", "log")
@@ -108,19 +106,9 @@ def errors(c, g, a=None, A=None, eps=None, combine: str = "sum", rows=None) -> d
 #: target's.  Beyond it each log unit of excess costs :data:`HIGHLIGHT_WEIGHT` times its square
 #: in what the fit minimises (:func:`highlight_excess`): a constraint the fit meets wherever the
 #: model can, and no cost at all inside the band, so a fit that keeps its highlight is unchanged.
+#: ``HIGHLIGHT_WEIGHT`` is the default of :func:`plausible.fit`'s ``highlight`` argument (0: the plain
+#: metrics, as the papers fit).
 HIGHLIGHT_BAND, HIGHLIGHT_WEIGHT = 1.75, 100.0
-
-
-@contextlib.contextmanager
-def highlight_weight(weight: float):
-    """Fit with :data:`HIGHLIGHT_WEIGHT` set to ``weight`` inside the block (0: the plain metrics,
-    as the papers fit; the Neumann perceptual figure compares the paper's two metrics so)."""
-    global HIGHLIGHT_WEIGHT
-    was, HIGHLIGHT_WEIGHT = HIGHLIGHT_WEIGHT, float(weight)
-    try:
-        yield
-    finally:
-        HIGHLIGHT_WEIGHT = was
 
 
 #: The highlight is held at incidences up to this angle (degrees).  Beyond, lobes differ by
@@ -154,8 +142,8 @@ def highlight_ratio(c, g, rows, eps) -> np.ndarray:
 def highlight_excess(c, g, rows, eps) -> np.ndarray:
     """The highlight's log ratio beyond the band (:data:`HIGHLIGHT_BAND`), signed, zero inside:
     ``sign(d) max(0, |d| - ln B)`` with ``d`` of :func:`highlight_ratio`.  The fit adds
-    ``HIGHLIGHT_WEIGHT sum excess^2`` to every metric's figure (least squares: rows
-    ``sqrt(HIGHLIGHT_WEIGHT) excess``)."""
+    ``w sum excess^2`` to every metric's figure (least squares: rows ``sqrt(w) excess``), ``w`` its
+    ``highlight`` argument (default :data:`HIGHLIGHT_WEIGHT`)."""
     d = highlight_ratio(c, g, rows, eps)
     return np.sign(d) * np.maximum(np.abs(d) - np.log(HIGHLIGHT_BAND), 0.0)
 
