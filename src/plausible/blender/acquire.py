@@ -94,7 +94,8 @@ def material_spec(blend=None, material=None, *, principled=None, diffuse=None, s
         return {"diffuse": c.tolist()}
     if script is not None:
         return {"script": str(script)}
-    return {"principled": {str(k): (list(map(float, v)) if np.ndim(v) else float(v)) for k, v in principled.items()}}
+    return {"principled": {str(k): v if isinstance(v, str) else (list(map(float, v)) if np.ndim(v) else float(v))
+                           for k, v in principled.items()}}
 
 
 @dataclass

@@ -57,7 +57,8 @@ def run_job(material: dict, renders: list, *, resolution: int, spp: int, seed: i
             save_blend=None, threads: int | None = None) -> list:
     """Run one job of :mod:`.worker` (its docstring: ``material``, ``renders``) and
     return the renders as float arrays ``(resolution, resolution, 3)``.
-    RuntimeError with Blender's last lines when it fails."""
+    ValueError naming the argument for a bad input (a material not in its file), RuntimeError
+    with Blender's last lines when Blender fails otherwise."""
     py = blender_python()
     threads = threads or min(4, os.cpu_count() or 1)
     out = Path(tempfile.mkdtemp(prefix="plausible-blender-"))
@@ -67,6 +68,8 @@ def run_job(material: dict, renders: list, *, resolution: int, spp: int, seed: i
         (out / "job.json").write_text(json.dumps(job))
         p = subprocess.run([str(py), str(WORKER), str(out / "job.json")], capture_output=True, text=True,
                            timeout=TIMEOUT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+        if p.returncode == 3:       # worker.BAD_INPUT: its last line names the argument and why
+            raise ValueError((p.stderr.strip().splitlines() or ["bad input"])[-1])
         if p.returncode != 0:
             tail = "\n".join((p.stdout + p.stderr).strip().splitlines()[-6:])
             raise RuntimeError(f"Blender ({py}) failed with status {p.returncode}:\n{tail}")

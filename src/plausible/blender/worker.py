@@ -14,8 +14,10 @@ plausible.  Usage::
 
 * ``{"blend": FILE, "name": NAME}``: a material of a ``.blend`` file (appended);
 * ``{"script": FILE}``: a Python file defining ``build(bpy) -> material``
-  (what ``plausible convert --to blender --out FILE.py`` writes);
-* ``{"principled": {input name: value}}`` or ``{"diffuse": [r, g, b]}``: a node
+  (what ``plausible convert --to blender --out FILE.py`` writes; with ``"all": true``
+  its ``build_all(bpy)``, every material);
+* ``{"principled": {input name: value}}`` (lower-case keys are properties of the
+  node: ``"distribution": "GGX"`` or ``"MULTI_GGX"``) or ``{"diffuse": [r, g, b]}``: a node
   tree of one Principled (or Diffuse) BSDF.
 
 Each ``RENDER`` is ``{"kind": "sun", "light": [x, y, z], "camera": [x, y, z]}``
@@ -40,20 +42,25 @@ import bpy
 import numpy as np
 
 ORTHO_SCALE = 2.2
+#: Exit status of a job whose input is wrong (a material not in the file): its last line says why.
+BAD_INPUT = 3
 
 
 def _material(spec):
     if "blend" in spec:
         with bpy.data.libraries.load(spec["blend"], link=False) as (src, dst):
             if spec["name"] not in src.materials:
-                raise SystemExit(f"material: {spec['name']!r} is not in {spec['blend']} "
-                                 f"(it has {', '.join(src.materials) or 'no materials'})")
+                print(f"material: {spec['name']!r} is not in {spec['blend']} "
+                      f"(it has {', '.join(src.materials) or 'no materials'})", file=sys.stderr)
+                raise SystemExit(BAD_INPUT)
             dst.materials = [spec["name"]]
         return dst.materials[0]
     if "script" in spec:
-        ns = {"__name__": "plausible_material"}
+        ns = {"__name__": "plausible_material", "__file__": os.path.abspath(spec["script"])}
         with open(spec["script"]) as fh:
             exec(compile(fh.read(), spec["script"], "exec"), ns)
+        if spec.get("all"):
+            return ns["build_all"](bpy)[0]
         return ns["build"](bpy)
     mat = bpy.data.materials.new("plausible")
     mat.use_nodes = True
@@ -68,7 +75,10 @@ def _material(spec):
     else:
         b = nodes.new("ShaderNodeBsdfPrincipled")
         for k, v in spec["principled"].items():
-            b.inputs[k].default_value = (list(v) + [1.0]) if isinstance(v, (list, tuple)) and len(v) == 3 else v
+            if k.islower():     # a property of the node (distribution, subsurface_method), not an input
+                setattr(b, k, v)
+            else:
+                b.inputs[k].default_value = (list(v) + [1.0]) if isinstance(v, (list, tuple)) and len(v) == 3 else v
     mat.node_tree.links.new(b.outputs[0], out.inputs["Surface"])
     return mat
 
@@ -178,6 +188,9 @@ def main(job_path):
     with open(job_path) as fh:
         job = json.load(fh)
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    if "blend" in job["material"] and not os.path.isfile(job["material"]["blend"]):
+        print(f"blend: no such file {job['material']['blend']!r}", file=sys.stderr)
+        raise SystemExit(BAD_INPUT)
     mat = _material(job["material"])
     mat.use_fake_user = True
     scene, cam, sun, world = _scene(job, mat)
@@ -193,6 +206,8 @@ def main(job_path):
     if job.get("save_blend"):
         for o in list(bpy.data.objects):
             bpy.data.objects.remove(o)
+        bpy.ops.wm.save_as_mainfile(filepath=job["save_blend"])
+        bpy.ops.file.make_paths_relative()          # the textures beside the .blend, wherever it goes
         bpy.ops.wm.save_as_mainfile(filepath=job["save_blend"])
 
 
