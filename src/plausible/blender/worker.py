@@ -15,7 +15,7 @@ plausible.  Usage::
 * ``{"blend": FILE, "name": NAME}``: a material of a ``.blend`` file (appended);
 * ``{"script": FILE}``: a Python file defining ``build(bpy) -> material``
   (what ``plausible convert --to blender --out FILE.py`` writes; with ``"all": true``
-  its ``build_all(bpy)``, every material);
+  its ``build_all(bpy)``, every material; with ``"name"``, that one of them);
 * ``{"principled": {input name: value}}`` (lower-case keys are properties of the
   node: ``"distribution": "GGX"`` or ``"MULTI_GGX"``) or ``{"diffuse": [r, g, b]}``: a node
   tree of one Principled (or Diffuse) BSDF.
@@ -59,8 +59,9 @@ def _material(spec):
         ns = {"__name__": "plausible_material", "__file__": os.path.abspath(spec["script"])}
         with open(spec["script"]) as fh:
             exec(compile(fh.read(), spec["script"], "exec"), ns)
-        if spec.get("all"):
-            return ns["build_all"](bpy)[0]
+        if spec.get("all") or spec.get("name"):
+            mats = ns["build_all"](bpy)
+            return next((m for m in mats if m.name == spec.get("name")), mats[0])
         return ns["build"](bpy)
     mat = bpy.data.materials.new("plausible")
     mat.use_nodes = True
