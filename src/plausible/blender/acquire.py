@@ -225,8 +225,12 @@ def acquire(spec: dict, *, name: str = "material", angles=ANGLES, resolution: in
         for s in (1.0, -1.0):
             r = math.radians(s * a)
             renders.append({"kind": "sun", "light": [math.sin(r), 0.0, math.cos(r)], "camera": [0, 0, 1]})
+    from ..progress import start
+
+    tick = start(progress, 1, f"acquire {name} in Cycles ({len(renders)} renders)")
     t0 = time.perf_counter()
     imgs = runner.run_job(spec, renders, resolution=resolution, spp=spp, seed=seed)
+    tick()
     normals, mask = _pixel_normals(int(resolution))
     pairs = [_sun_pairs(imgs[1 + 2 * k], a, normals, mask) for k, a in enumerate(angles)]
     swaps = [_swapped(imgs[1 + 2 * k], imgs[2 + 2 * k], a, normals, mask) for k, a in enumerate(angles) if a > 0]

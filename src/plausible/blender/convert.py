@@ -77,8 +77,10 @@ def _textures(conv, where) -> dict:
 
 
 def _spec(path: Path, name: str) -> dict:
-    return {"blend": str(path), "name": name} if path.suffix.lower() == ".blend" else \
-        {"script": str(path), "name": name}
+    """The written material, its textures unlinked (the acquisition measures a uniform material;
+    the fit's colour is what a texture multiplies)."""
+    return {"blend": str(path), "name": name, "untextured": True} if path.suffix.lower() == ".blend" else \
+        {"script": str(path), "name": name, "untextured": True}
 
 
 #: Light-camera angles (degrees) of the look comparison: those whose highlight the acquisition

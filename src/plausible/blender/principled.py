@@ -153,6 +153,7 @@ def _material(bpy, name, inputs, textures):
             mix = nodes.new("ShaderNodeMix")
             mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
             mix.inputs["Factor"].default_value = 1.0
+            mix.inputs[6].default_value = [1.0, 1.0, 1.0, 1.0]    # white where the map is unlinked
             mix.inputs[7].default_value = list(inputs["Base Color"]) + [1.0]
             links.new(tex.outputs["Color"], mix.inputs[6])
             links.new(mix.outputs[2], bsdf.inputs["Base Color"])

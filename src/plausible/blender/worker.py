@@ -16,6 +16,8 @@ plausible.  Usage::
 * ``{"script": FILE}``: a Python file defining ``build(bpy) -> material``
   (what ``plausible convert --to blender --out FILE.py`` writes; with ``"all": true``
   its ``build_all(bpy)``, every material; with ``"name"``, that one of them);
+  any spec with ``"untextured": true`` has the links out of its Image Texture nodes
+  removed (the uniform material they modulate);
 * ``{"principled": {input name: value}}`` (lower-case keys are properties of the
   node: ``"distribution": "GGX"`` or ``"MULTI_GGX"``) or ``{"diffuse": [r, g, b]}``: a node
   tree of one Principled (or Diffuse) BSDF.
@@ -81,6 +83,16 @@ def _material(spec):
             else:
                 b.inputs[k].default_value = (list(v) + [1.0]) if isinstance(v, (list, tuple)) and len(v) == 3 else v
     mat.node_tree.links.new(b.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def _untextured(mat):
+    """``mat`` with the links out of its Image Texture nodes removed: each socket they fed
+    takes its own default (a Multiply mix its fitted colour, a Bump or Normal Map no
+    relief), so the acquisition sees the uniform material the textures modulate."""
+    tree = mat.node_tree
+    for link in [k for k in tree.links if k.from_node.type == "TEX_IMAGE"]:
+        tree.links.remove(link)
     return mat
 
 
@@ -193,6 +205,8 @@ def main(job_path):
         print(f"blend: no such file {job['material']['blend']!r}", file=sys.stderr)
         raise SystemExit(BAD_INPUT)
     mat = _material(job["material"])
+    if job["material"].get("untextured"):
+        _untextured(mat)
     mat.use_fake_user = True
     scene, cam, sun, world = _scene(job, mat)
     for k, r in enumerate(job["renders"]):
