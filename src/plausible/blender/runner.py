@@ -68,8 +68,9 @@ def run_job(material: dict, renders: list, *, resolution: int, spp: int, seed: i
         (out / "job.json").write_text(json.dumps(job))
         p = subprocess.run([str(py), str(WORKER), str(out / "job.json")], capture_output=True, text=True,
                            timeout=TIMEOUT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
-        if p.returncode == 3:       # worker.BAD_INPUT: its last line names the argument and why
-            raise ValueError((p.stderr.strip().splitlines() or ["bad input"])[-1])
+        if p.returncode == 3:       # worker.BAD_INPUT: its last line is "ARGUMENT<TAB>why"
+            arg, _, why = (p.stderr.strip().splitlines() or ["job\tbad input"])[-1].partition("\t")
+            raise ValueError(f"{arg}: {why}")
         if p.returncode != 0:
             tail = "\n".join((p.stdout + p.stderr).strip().splitlines()[-6:])
             raise RuntimeError(f"Blender ({py}) failed with status {p.returncode}:\n{tail}")

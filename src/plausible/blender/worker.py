@@ -48,13 +48,18 @@ ORTHO_SCALE = 2.2
 BAD_INPUT = 3
 
 
+def _bad_input(argument, why):
+    """Stop with :data:`BAD_INPUT`, the last line of stderr ``ARGUMENT<TAB>why`` (the runner's ValueError)."""
+    print(f"{argument}\t{why}", file=sys.stderr)
+    raise SystemExit(BAD_INPUT)
+
+
 def _material(spec):
     if "blend" in spec:
         with bpy.data.libraries.load(spec["blend"], link=False) as (src, dst):
             if spec["name"] not in src.materials:
-                print(f"material: {spec['name']!r} is not in {spec['blend']} "
-                      f"(it has {', '.join(src.materials) or 'no materials'})", file=sys.stderr)
-                raise SystemExit(BAD_INPUT)
+                _bad_input("material", f"{spec['name']!r} is not in {spec['blend']} "
+                                       f"(it has {', '.join(src.materials) or 'no materials'})")
             dst.materials = [spec["name"]]
         return dst.materials[0]
     if "script" in spec:
@@ -202,8 +207,7 @@ def main(job_path):
         job = json.load(fh)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     if "blend" in job["material"] and not os.path.isfile(job["material"]["blend"]):
-        print(f"blend: no such file {job['material']['blend']!r}", file=sys.stderr)
-        raise SystemExit(BAD_INPUT)
+        _bad_input("blend", f"no such file {job['material']['blend']!r}")
     mat = _material(job["material"])
     if job["material"].get("untextured"):
         _untextured(mat)
