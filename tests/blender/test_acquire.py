@@ -56,9 +56,9 @@ def test_furnace_of_a_single_scatter_ggx_metal_matches_plausibles_gltf_model(ble
 def test_cycles_multiscatter_ggx_is_not_reciprocal_and_single_scatter_is(blender):
     spec = {"Base Color": [1, 1, 1], "Metallic": 1.0, "Roughness": 0.5}
     single = check_acquisition(acquire(material_spec(principled=dict(spec, distribution="GGX")),
-                                       angles=(40, 80, 120), resolution=64))
+                                       angles=(40, 80, 120), resolution=96))
     multi = check_acquisition(acquire(material_spec(principled=dict(spec, distribution="MULTI_GGX")),
-                                      angles=(40, 80, 120), resolution=64))
+                                      angles=(40, 80, 120), resolution=96))
     assert single["reciprocity"].passed
     assert not multi["reciprocity"].passed and multi["reciprocity"].details["median"] > 0.01
 
@@ -69,14 +69,15 @@ def _synthetic(f_ab, f_ba, albedo, stderr=1e-3):
     return Acquisition("synthetic", np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), th,
                        np.tile(np.asarray(albedo, float)[:, None], (1, 3)), np.full((len(albedo), 3), stderr),
                        np.tile(np.asarray(f_ab, float)[:, None], (1, 3)), np.tile(np.asarray(f_ba, float)[:, None], (1, 3)),
-                       np.full((n, 2), 0.5), 48, 16, (40.0,), 0.0)
+                       np.c_[np.full((n, 2), 0.5), np.zeros(n)], 48, 16, (40.0,), 0.0)
 
 
 class TestCheckAcquisitionCanFail:
     def test_a_material_ten_percent_brighter_one_way_fails_reciprocity(self):
-        f = np.linspace(0.1, 1.0, 50)
+        f = np.linspace(0.1, 1.0, 200)
         assert check_acquisition(_synthetic(f, f, [0.9] * 5))["reciprocity"].passed
-        assert not check_acquisition(_synthetic(f, 1.1 * f, [0.9] * 5))["reciprocity"].passed
+        r = check_acquisition(_synthetic(f, 1.1 * f, [0.9] * 5))["reciprocity"]
+        assert not r.passed and not r.unresolved and r.figure == pytest.approx(0.1 / 1.05)
 
     def test_an_albedo_above_one_beyond_its_noise_fails_energy(self):
         f = np.ones(10)
@@ -98,3 +99,15 @@ class TestArguments:
     def test_a_diffuse_colour_outside_0_1_is_refused(self):
         with pytest.raises(ValueError, match=r"diffuse: the colour must be in \[0, 1\]"):
             material_spec(diffuse=1.5)
+
+
+def test_a_lobe_narrower_than_the_pixels_leaves_reciprocity_unresolved_not_failed(blender):
+    # roughness 0.1 (alpha 0.01): the highlight spans about a pixel at 64 px; bilinear reading cannot say
+    acq = acquire(material_spec(principled={"Base Color": [1, 1, 1], "Metallic": 1.0, "Roughness": 0.1,
+                                            "distribution": "GGX"}), angles=(40, 80), resolution=64)
+    r = check_acquisition(acq)["reciprocity"]
+    assert r.unresolved and not r.passed
+
+
+def test_an_anisotropic_material_leaves_reciprocity_unresolved(diffuse):
+    assert check_acquisition(diffuse, isotropic=False)["reciprocity"].unresolved

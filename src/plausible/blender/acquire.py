@@ -112,7 +112,8 @@ class Acquisition:
     albedo_theta: np.ndarray
     albedo: np.ndarray
     albedo_stderr: np.ndarray
-    #: ``(k, 3)`` f(wi, wo) and f(wo, wi) of the reciprocity pairs, and ``(k,)`` their theta_i, theta_o
+    #: ``(k, 3)`` f(wi, wo) and f(wo, wi) of the reciprocity pairs; ``(k, 3)`` their theta_i, theta_o
+    #: (radians) and the error bound of the bilinear reading of f(wo, wi) (relative, :func:`_curvature`)
     f_ab: np.ndarray
     f_ba: np.ndarray
     recip_thetas: np.ndarray
@@ -145,8 +146,23 @@ def _bilinear(img, x, y):
     j0 = np.clip(np.floor(u).astype(int), 0, res - 2)
     i0 = np.clip(np.floor(v).astype(int), 0, res - 2)
     fu, fv = (u - j0)[:, None], (v - i0)[:, None]
-    return ((1 - fu) * (1 - fv) * img[i0, j0] + fu * (1 - fv) * img[i0, j0 + 1]
-            + (1 - fu) * fv * img[i0 + 1, j0] + fu * fv * img[i0 + 1, j0 + 1])
+    corners = np.stack([img[i0, j0], img[i0, j0 + 1], img[i0 + 1, j0], img[i0 + 1, j0 + 1]])
+    value = (1 - fu) * (1 - fv) * corners[0] + fu * (1 - fv) * corners[1] + (1 - fu) * fv * corners[2] \
+        + fu * fv * corners[3]
+    curv = _curvature(img)
+    bound = np.max([curv[i0, j0], curv[i0, j0 + 1], curv[i0 + 1, j0], curv[i0 + 1, j0 + 1]], axis=0)
+    return value, bound
+
+
+def _curvature(img):
+    """Bilinear reading's error bound per pixel, relative: ``(|d2/dx2| + |d2/dy2|) / 8`` of the
+    image in pixel units (the error of linear interpolation is at most ``h^2 max|f''| / 8``)
+    over the pixel's value, the largest channel; infinite at the image's border."""
+    p = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    d2 = np.abs(p[1:-1, :-2] - 2 * img + p[1:-1, 2:]) + np.abs(p[:-2, 1:-1] - 2 * img + p[2:, 1:-1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(img > 0, d2 / 8.0 / img, np.where(d2 > 0, np.inf, 0.0))
+    return rel.max(-1)
 
 
 def _local(n, l, v):
@@ -183,8 +199,9 @@ def _swapped(img_a, img_b, a_deg, normals, mask):
     keep = (n @ l > cmin) & (n[:, 2] > cmin)
     n, fa = n[keep], img_a[mask][keep] / (n[keep] @ l)[:, None]
     rx = n[:, 0] * math.cos(a) - n[:, 2] * math.sin(a)       # R n: R turns l onto z
-    fb = _bilinear(img_b, rx, n[:, 1]) / n[:, 2][:, None]    # (R n) . l_b = n . z
-    th = np.stack([np.arccos(np.clip(n @ l, -1, 1)), np.arccos(np.clip(n[:, 2], -1, 1))], -1)
+    fb, spread = _bilinear(img_b, rx, n[:, 1])
+    fb = fb / n[:, 2][:, None]                                # (R n) . l_b = n . z
+    th = np.stack([np.arccos(np.clip(n @ l, -1, 1)), np.arccos(np.clip(n[:, 2], -1, 1)), spread], -1)
     return fa, fb, th
 
 
@@ -237,7 +254,7 @@ def acquire(spec: dict, *, name: str = "material", angles=ANGLES, resolution: in
     th, alb, se = _furnace(imgs[0], normals, mask)
     cat = lambda k, xs: np.concatenate([x[k] for x in xs]) if xs else np.zeros((0, 3))   # noqa: E731
     return Acquisition(name, cat(0, pairs), cat(1, pairs), cat(2, pairs), th, alb, se, cat(0, swaps),
-                       cat(1, swaps), cat(2, swaps) if swaps else np.zeros((0, 2)), int(resolution), int(spp),
+                       cat(1, swaps), cat(2, swaps) if swaps else np.zeros((0, 3)), int(resolution), int(spp),
                        angles, time.perf_counter() - t0)
 
 
@@ -266,22 +283,46 @@ def _fill_table(wi, wo, f):
     return vals.T.reshape((3,) + merl.RES)
 
 
-def _reciprocity(acq: Acquisition, tol: float) -> PropertyResult:
+#: A swapped pair is read bilinearly between four pixels; where the reading's error bound
+#: (:func:`_curvature`: the image's second differences over 8, relative) exceeds this, a lobe
+#: narrower than a few pixels, the pair is left out as unresolved (a quarter of the tolerance).
+RESOLVED_SPREAD = 0.005
+#: Fewest resolved pairs on which a failure of reciprocity is a verdict (else unresolved).
+MIN_RESOLVED = 100
+
+
+def _reciprocity(acq: Acquisition, tol: float, isotropic: bool = True) -> PropertyResult:
     """Relative difference of f(wi, wo) and f(wo, wi) over the swapped pairs where f is
-    at least 1e-3 of its largest value; passes when the 95th percentile is <= ``tol``."""
+    at least 1e-3 of its largest value and the lobe is resolved (:data:`RESOLVED_SPREAD`);
+    passes when the 95th percentile is <= ``tol``; a failure is unresolved when fewer than
+    :data:`MIN_RESOLVED` pairs are resolved, and so is an anisotropic material (the swapped reading
+    is at a normal whose tangent has turned)."""
     fa, fb = acq.f_ab.mean(1), acq.f_ba.mean(1)
+    if not isotropic:
+        return PropertyResult("reciprocity", False, math.nan, "unresolved: an anisotropic material's tangent "
+                              "turns with the sphere, so the swapped pair is not read at the same frame", {},
+                              {}, unresolved=True)
     big = np.maximum(fa, fb) > 1e-3 * max(float(np.max(np.maximum(fa, fb), initial=0.0)), 1e-300)
-    rel = np.abs(fa - fb)[big] / (0.5 * (fa + fb)[big])
-    if rel.size == 0:
+    ok = big & (acq.recip_thetas[:, 2] <= RESOLVED_SPREAD)
+    rel = np.abs(fa - fb)[ok] / (0.5 * (fa + fb)[ok])
+    if not big.any():
         return PropertyResult("reciprocity", True, math.nan, "not applicable: no swapped pairs (give an angle > 0)",
                               {}, dict(applicable=False, reason="no swapped pairs"))
+    share = float(ok.sum() / big.sum())
+    if rel.size == 0:
+        return PropertyResult("reciprocity", False, math.nan, f"unresolved: no pair resolved at "
+                              f"{acq.resolution} px (a lobe narrower than a few pixels)", {},
+                              dict(resolved_share=share), unresolved=True)
     p95, med = float(np.percentile(rel, 95)), float(np.median(rel))
-    k = int(np.argmax(np.where(big, np.abs(fa - fb) / np.maximum(0.5 * (fa + fb), 1e-300), -1)))
+    k = int(np.argmax(np.where(ok, np.abs(fa - fb) / np.maximum(0.5 * (fa + fb), 1e-300), -1)))
     worst = dict(theta_i_deg=float(np.degrees(acq.recip_thetas[k, 0])),
                  theta_o_deg=float(np.degrees(acq.recip_thetas[k, 1])), f_ab=float(fa[k]), f_ba=float(fb[k]))
+    unresolved = rel.size < MIN_RESOLVED and p95 > tol
     return PropertyResult("reciprocity", p95 <= tol, p95,
                           f"<= {tol:g} (95th percentile of |f(wi,wo) - f(wo,wi)| / mean over {rel.size} swapped "
-                          f"pairs; median {med:.3g})", worst, dict(median=med, pairs=int(rel.size)))
+                          f"pairs resolved at {acq.resolution} px, {share:.0%} of them; median {med:.3g})",
+                          worst, dict(median=med, pairs=int(rel.size), resolved_share=share),
+                          unresolved=unresolved)
 
 
 def _energy(acq: Acquisition, tol: float) -> PropertyResult:
@@ -301,17 +342,18 @@ def _energy(acq: Acquisition, tol: float) -> PropertyResult:
 
 
 def check_acquisition(acq: Acquisition, *, reciprocity_tol: float = RECIPROCITY_TOL,
-                      energy_tol: float = ENERGY_TOL) -> CheckReport:
+                      energy_tol: float = ENERGY_TOL, isotropic: bool = True) -> CheckReport:
     """``plausible check`` of an acquired Cycles material: reciprocity from swapped light
     and camera, energy from the white furnace's albedo, angle by angle (what
     :func:`acquire` measured; module docstring), as a :class:`CheckReport`.  The
     sampling and chi-square checks concern a sampler, which an acquisition does not
-    have (Cycles samples its own BSDFs): reported not applicable."""
+    have (Cycles samples its own BSDFs): reported not applicable.  ``isotropic=False``
+    (an anisotropic material): reciprocity is reported unresolved (module docstring)."""
     from ..analysis.report import not_applicable
 
     rep = CheckReport(f"blender:{acq.name}", dict(resolution=acq.resolution, spp=acq.spp,
                                                    angles_deg=list(acq.angles)))
-    rep.results = [_reciprocity(acq, reciprocity_tol), _energy(acq, energy_tol),
+    rep.results = [_reciprocity(acq, reciprocity_tol, isotropic), _energy(acq, energy_tol),
                    not_applicable("sampling", "an acquisition measures values; Cycles keeps its sampler"),
                    not_applicable("chi2", "an acquisition measures values; Cycles keeps its sampler")]
     rep.notes.append(f"acquired in Cycles ({len(acq.angles)} light angles x 2 and a white furnace, "
