@@ -146,7 +146,14 @@ def convert_to_blender(source, out, metric: str = "perceptual", *, verify_looks:
     if not (out.parent if str(out.parent) else Path(".")).is_dir():
         raise ValueError(f"out: the folder of {str(out)!r} does not exist")
     conv = convert(source, to="gltf", metric=metric, looks=False)
-    mats = {c.name: principled_inputs(c.result.params) for c in conv.items}
+    mats = {}
+    for c in conv.items:
+        if "transmission" in c.surface or not hasattr(c.result, "params"):
+            conv.skipped.append({"name": c.name, "skipped": f"{c.name}: glass (transmission) is not written to "
+                                 "Blender yet: the writer makes reflecting Principled BSDFs"})
+            continue
+        mats[c.name] = principled_inputs(c.result.params)
+    conv.items = [c for c in conv.items if c.name in mats]
     if not mats:
         raise ValueError(f"source: nothing to convert in {source!r} "
                          f"({'; '.join(s['skipped'] for s in conv.skipped) or 'no materials'})")
