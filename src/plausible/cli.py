@@ -390,7 +390,8 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
-    --python (see docs/analysis.md).  Exits with status 1 when a property fails.
+    --python (see docs/analysis.md); or a Cycles material of a .blend file, acquired in
+    Blender, with --blender FILE --material NAME (docs/blender.md).  Exits with status 1 when a property fails.
     A registered model's report ends with whether it holds what the model
     claims ("as claimed").  With --all: every registered model on its defaults
     and extremes, one row each in a compact table (--verbose: every full report
