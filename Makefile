@@ -15,9 +15,18 @@ THREE_DIR     := .cache/npm/node_modules/three
 GLTF_VALIDATOR_VERSION := 2.0.0-dev.3.10
 GLTF_VALIDATOR_DIR     := .cache/npm/node_modules/gltf-validator
 
-.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium glslang three gltf-validator clean
+# Blender as a Python module for plausible.blender (issue 46): bpy pins numpy<2 and CPython 3.11, so it
+# gets an environment of its own, run out of process (src/plausible/blender/runner.py).
+BLENDER_PY      ?= python3.11
+BLENDER_VERSION := 5.0.1
+BLENDER_VENV    := .venv-blender
+BLENDER_STAMP   := $(BLENDER_VENV)/.installed-bpy-$(BLENDER_VERSION)
+# The X11/GL client libraries bpy links against (it renders headless; Debian 12 names).
+BLENDER_LIBS    := libx11-6 libxi6 libxfixes3 libxrender1 libxext6 libxkbcommon0 libsm6 libgl1
 
-setup: $(STAMP) llvm chromium glslang three gltf-validator
+.PHONY: demo test test-all bench mitsuba-builtins setup llvm chromium glslang three gltf-validator blender blender-libs clean
+
+setup: $(STAMP) llvm chromium glslang three gltf-validator blender
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -64,6 +73,23 @@ gltf-validator: three
 	  npm install --silent --no-audit --no-fund --prefix .cache/npm gltf-validator@$(GLTF_VALIDATOR_VERSION); \
 	fi
 
+# Blender (bpy) in .venv-blender for the tests of tests/blender (about 1 GB installed, 375 MB download).
+blender: blender-libs $(BLENDER_STAMP)
+
+$(BLENDER_STAMP):
+	test -x $(BLENDER_VENV)/bin/python || $(BLENDER_PY) -m venv $(BLENDER_VENV)
+	$(BLENDER_VENV)/bin/python -m pip install -q --upgrade pip
+	$(BLENDER_VENV)/bin/python -m pip install -q "bpy==$(BLENDER_VERSION)"
+	$(BLENDER_VENV)/bin/python -c "import bpy"
+	touch $@
+
+blender-libs:
+	@missing=$$(for p in $(BLENDER_LIBS); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null; \
+	  else sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null; fi; \
+	fi
+
 # The main job: every figure of the papers, measured, as a browsable report -> $(OUT)/index.html.
 demo: setup
 	$(BIN)/plausible figures --out $(OUT)
@@ -86,4 +112,4 @@ mitsuba-builtins: setup
 	$(BIN)/python scripts/mitsuba_builtins.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .cache/npm
+	rm -rf $(VENV) $(BLENDER_VENV) $(OUT) .pytest_cache .cache/npm

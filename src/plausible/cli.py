@@ -378,16 +378,20 @@ def eval_cmd(model, params, wi, wo, as_json):
               help="With --materials: only this material, e.g. alum-bronze (repeatable).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), metavar="DIR",
               help="With --materials: write materials-table.md/.csv (and materials.md's summary) here.")
+@click.option("--blender", "blend_file", type=click.Path(dir_okay=False), metavar="FILE.blend",
+              help="Acquire a material of a Blender file in Cycles (--material NAME) and check it "
+                   "(docs/blender.md).")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
               help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
 @click.option("--scheduler", metavar="ADDRESS",
               help="With --materials: a running Dask scheduler (tcp://host:8786) instead of --jobs.")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
-          python_obj, all_materials, fit_keys, material_names, out_dir, jobs, scheduler):
+          python_obj, all_materials, fit_keys, material_names, out_dir, blend_file, jobs, scheduler):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
-    --python (see docs/analysis.md).  Exits with status 1 when a property fails.
+    --python (see docs/analysis.md); or a Cycles material of a .blend file, acquired in
+    Blender, with --blender FILE --material NAME (docs/blender.md).  Exits with status 1 when a property fails.
     A registered model's report ends with whether it holds what the model
     claims ("as claimed").  With --all: every registered model on its defaults
     and extremes, one row each in a compact table (--verbose: every full report
@@ -404,6 +408,10 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     from .analysis.report import CheckReport
     from .analysis.suite import model_variants
 
+    if blend_file is not None:
+        return _check_blender(blend_file, material_names, quick, as_json,
+                              model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj
+                              or all_materials or fit_keys or out_dir)
     if all_materials or fit_keys or material_names or out_dir or scheduler or (jobs and not all_models):
         return _check_materials(all_materials, fit_keys, material_names, out_dir, (jobs, scheduler), quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
@@ -445,6 +453,29 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
         _print_compact(rows)
         _print_summary(reports, verdicts)
     sys.exit(0 if all(verdicts) else 1)
+
+
+def _check_blender(blend_file, names, quick, as_json, other):
+    """check --blender FILE --material NAME: the material acquired in Cycles and checked."""
+    import json
+
+    from .blender import BlenderUnavailable, check_material
+
+    if other:
+        _fail("--blender checks one material of a .blend file; it takes only --material, --quick and --json")
+    if len(names) != 1:
+        _fail(f"--blender needs exactly one --material NAME (the material in {blend_file}), got {len(names)}")
+    try:
+        rep, _ = check_material(blend_file, names[0], quick=quick, progress=silent if as_json else _bar())
+    except ValueError as e:
+        _fail(str(e).replace("blend: ", "--blender: ").replace("material: ", "--material: "))
+    except BlenderUnavailable as e:
+        _fail(str(e))
+    if as_json:
+        click.echo(json.dumps(rep.to_dict(), indent=1))
+    else:
+        _print_report(rep)
+    sys.exit(0 if rep.passed else 1)
 
 
 def _each_report(targets, all_models, quick, jobs, as_json):
@@ -805,11 +836,11 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
 @click.option("--to", "to", required=True, metavar="TARGET",
               help="mitsuba (the family chosen per material), mitsuba:TYPE (diffuse, roughconductor, roughplastic, blendbsdf, "
                    "blendbsdf-tir, principled), gltf, materialx, usd (the glTF fit as OpenPBR/UsdPreviewSurface), "
-                   "or a registered model.")
+                   "blender (Principled BSDFs in a .blend or .py, verified in Cycles), or a registered model.")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Output: .json (a dict of Mitsuba dicts by material name), .xml (<bsdf id=...> elements) "
-                   "or .gltf (with --to gltf), .mtlx (--to materialx), .usda (--to usd); - for standard output (that "
-                   "file's text with those targets, else the .json's).")
+                   "or .gltf (with --to gltf), .mtlx (--to materialx), .usda (--to usd), .blend or .py (--to blender); "
+                   "- for standard output (that file's text with the text targets, else the .json's).")
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
 @click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
@@ -825,6 +856,8 @@ def convert_cmd(source, to, out, metric, as_json):
 
     if out == "-" and as_json:
         _fail("--out - and --json both write to standard output: give --out a file")
+    if str(to).strip() == "blender":
+        return _convert_blender(source, out, metric, as_json)
     try:
         if out != "-":
             check_output(out, to)          # a bad --out is refused before minutes of fitting
@@ -842,6 +875,43 @@ def convert_cmd(source, to, out, metric, as_json):
         click.echo(f"warning: {s['skipped']}", err=True)
     if res.skipped:
         raise SystemExit(1)                # some materials skipped: the rest converted and written
+
+
+def _convert_blender(source, out, metric, as_json):
+    """convert --to blender: Principled BSDFs in a .blend or .py, each verified in Cycles."""
+    from .blender import BlenderUnavailable
+    from .blender.convert import convert_to_blender
+
+    try:
+        res = convert_to_blender(source, out, metric, progress=silent if as_json else _bar())
+    except ValueError as e:
+        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))
+    except BlenderUnavailable as e:
+        _fail(str(e))
+    if as_json:
+        _echo_json(res.to_json())
+    else:
+        t = Table()
+        for col in ("material", "Principled BSDF", "albedo diff. (source / fit)", "stderr", "FLIP", "highlight"):
+            t.add_column(col)
+        for v in res.verified:
+            inp = ", ".join(f"{k} {_fmt_input(x)}" for k, x in v.inputs.items())
+            t.add_row(escape(v.name), escape(inp), f"{v.albedo_difference:.3f} / {v.fit_albedo_difference:.3f}",
+                      f"{v.albedo_stderr:.2g}", "-" if v.flip is None else f"{v.flip:.3f}",
+                      "-" if v.highlight_ratio is None else f"x{v.highlight_ratio:.3g}")
+        console.print(t)
+        console.print(f"wrote {escape(str(res.path))} (each material read back from it and acquired in Cycles)")
+    for v in res.verified:
+        for w in v.notes:
+            click.echo(f"warning: {v.name}: {w}", err=True)
+    for s in res.conversion.skipped:
+        click.echo(f"warning: {s['skipped']}", err=True)
+    if res.conversion.skipped:
+        raise SystemExit(1)
+
+
+def _fmt_input(x):
+    return "(" + ", ".join(f"{c:.3g}" for c in x) + ")" if isinstance(x, list) else f"{x:.3g}"
 
 
 def _convert_table(res, path):

@@ -1,0 +1,32 @@
+"""Virtual acquisition of a Cycles material (docs/blender.md): one Blender subprocess with the
+furnace and two sun renders per light angle, and the MERL table filled from the measured pairs.
+Skipped where Blender's interpreter (``.venv-blender``) is absent."""
+
+from __future__ import annotations
+
+import pytest
+
+from conftest import record
+from plausible.blender import BlenderUnavailable, acquire, blender_python, material_spec
+
+try:
+    blender_python()
+except BlenderUnavailable as e:       # pragma: no cover - make setup installs it
+    pytest.skip(str(e), allow_module_level=True)
+
+METAL = {"Base Color": [1, 1, 1], "Metallic": 1.0, "Roughness": 0.5}
+
+
+@pytest.mark.parametrize("res, angles", [(48, (0, 40, 80, 120, 160)), (96, tuple(range(0, 171, 10)))])
+def test_acquire_principled(benchmark, res, angles):
+    acq = benchmark.pedantic(acquire, args=(material_spec(principled=METAL),),
+                             kwargs=dict(resolution=res, angles=angles), rounds=2, iterations=1)
+    record(benchmark, "blender", f"acquire a Principled metal, {res} px, {2 * len(angles) + 1} renders",
+           backend="cycles-cpu", op="acquire", n=len(acq.f))
+
+
+def test_fill_merl_table(benchmark):
+    acq = acquire(material_spec(principled=METAL), resolution=96)
+    benchmark.pedantic(acq.brdf, rounds=2, iterations=1)
+    record(benchmark, "blender", f"MERL table (1.46 M cells) from {len(acq.f)} measured pairs", backend="numpy",
+           op="table", n=len(acq.f))

@@ -1,0 +1,184 @@
+"""A plausible conversion as Blender's Principled BSDF: the inputs, a node script, a ``.blend``.
+
+The fit is the glTF one (:func:`plausible.conversion.convert` with ``to="gltf"``: the
+``gltf-pbr`` model's base colour, metallic, roughness, specular, specular colour and
+anisotropy fitted to the source).  Blender's Principled BSDF (Blender 4.0 and later,
+manual "Principled BSDF"; Cycles ``principled_bsdf``) is the same microfacet
+metallic-roughness model, so the fitted values map onto its inputs:
+
+========================  ===========================================================
+Principled input          from ``gltf-pbr``
+========================  ===========================================================
+Base Color                ``base_color`` (linear RGB)
+Metallic                  ``metallic``
+Roughness                 ``roughness`` (both: GGX ``alpha = roughness^2``); with
+                          anisotropy, ``sqrt`` of the geometric mean of glTF's two
+                          alphas (below)
+IOR                       1.5 (glTF's dielectric: F0 = 0.04)
+Specular IOR Level        ``0.5 specular`` (Blender: 0.5 leaves F0 as the IOR gives it,
+                          0 removes the reflection, 1 doubles F0; glTF's
+                          ``specularFactor`` scales F0 the same way)
+Specular Tint             ``specular_color`` (tints the dielectric F0, as glTF's
+                          ``specularColorFactor``; on a metal Blender also tints the
+                          edge, glTF does not: equal for the white tint the fit gives
+                          metals)
+Anisotropic               ``(1 - 1/rho) / 0.9`` with ``rho = alpha_t / alpha_b`` of glTF
+                          (``alpha_t = mix(alpha, 1, s^2)``, ``alpha_b = alpha``):
+                          Cycles' ``alpha_x = alpha / sqrt(1 - 0.9 A)``,
+                          ``alpha_y = alpha sqrt(1 - 0.9 A)``, so the ratio is kept up to
+                          10 (A = 1) and the geometric mean through Roughness
+Anisotropic Rotation      ``anisotropy_rotation / (2 pi)`` (Blender: a fraction of a turn)
+========================  ===========================================================
+
+Textures: an MTL ``map_Kd`` becomes an Image Texture node (colour space sRGB) times
+the fitted base colour (a Multiply mix, as MTL and glTF multiply), ``bump`` /
+``map_bump`` a Bump node fed by an Image Texture in Non-Color, ``norm`` /
+``map_norm`` a Normal Map node (Non-Color); their file names are written relative to
+the output file.  What a Principled BSDF cannot express is left out with a note (the
+same as the glTF output's).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from . import runner
+
+__all__ = ["OUTPUTS", "principled_inputs", "node_script", "write_blender"]
+
+OUTPUTS = (".blend", ".py")
+#: MTL texture statements the node script connects, and how: (socket, colour space).
+TEXTURE_NODES = {"map_Kd": ("Base Color", "sRGB"), "bump": ("Bump", "Non-Color"), "map_bump": ("Bump", "Non-Color"),
+                 "norm": ("Normal Map", "Non-Color"), "map_norm": ("Normal Map", "Non-Color")}
+
+
+def _rgb(v) -> list:
+    return [float(x) for x in np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))]
+
+
+def principled_inputs(params: dict) -> dict:
+    """Principled BSDF inputs (Blender's names) of ``gltf-pbr`` parameters (module docstring)."""
+    r = float(params.get("roughness", 1.0))
+    s = float(params.get("anisotropy_strength", 0.0))
+    out = {"Base Color": _rgb(params.get("base_color", 1.0)), "Metallic": float(params.get("metallic", 1.0)),
+           "Roughness": r, "IOR": 1.5, "Specular IOR Level": 0.5 * float(params.get("specular", 1.0)),
+           "Specular Tint": _rgb(params.get("specular_color", 1.0))}
+    if s > 0.0:
+        alpha = max(r * r, 1e-8)
+        rho = (alpha + (1.0 - alpha) * s * s) / alpha          # glTF: alpha_t = mix(alpha, 1, s^2)
+        out["Anisotropic"] = float(min(1.0, (1.0 - 1.0 / rho) / 0.9))
+        out["Roughness"] = float(math.sqrt(alpha * math.sqrt(rho)))
+        out["Anisotropic Rotation"] = float(params.get("anisotropy_rotation", 0.0)) / (2 * math.pi) % 1.0
+    return out
+
+
+def node_script(materials: dict, textures: dict | None = None) -> str:
+    """A Python script for Blender that builds each material of ``materials``
+    (``{name: Principled inputs}``) with its ``textures`` (``{name: {MTL statement: file}}``,
+    :data:`TEXTURE_NODES`): ``build(bpy)`` returns the first material, ``build_all(bpy)``
+    all of them; run as a script (``blender --python FILE.py``) it builds them all."""
+    return _SCRIPT.replace("MATERIALS = {}", "MATERIALS = " + json.dumps(materials, indent=1)) \
+        .replace("TEXTURES = {}", "TEXTURES = " + json.dumps(textures or {}, indent=1)) \
+        .replace("TEXTURE_NODES = {}", "TEXTURE_NODES = " + json.dumps(TEXTURE_NODES))
+
+
+def write_blender(materials: dict, path, textures: dict | None = None) -> Path:
+    """Write ``materials`` (``{name: Principled inputs}``) to ``path``: ``.py`` (the node
+    script, :func:`node_script`) or ``.blend`` (the script run in Blender, the file saved
+    with the materials and no objects).  ValueError naming ``out`` for another suffix."""
+    from ..text import write_atomic
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in OUTPUTS:
+        raise ValueError(f"out: a Blender output ends in .blend or .py, got {str(path)!r}")
+    text = node_script(materials, textures)
+    if suffix == ".py":
+        write_atomic(path, text)
+        return path
+    script = path.with_name(path.name + ".tmp.py")
+    script.write_text(text)
+    try:
+        runner.run_job({"script": str(script), "all": True}, [], resolution=16, spp=1, save_blend=path.resolve())
+    finally:
+        script.unlink(missing_ok=True)
+    return path
+
+
+_SCRIPT = '''"""Principled BSDF materials written by plausible (convert --to blender).
+
+Run in Blender: ``blender --python THIS.py`` (or exec it in the Text Editor), or
+import it and call ``build_all(bpy)``.  The texture files are relative to this file.
+"""
+import os
+
+MATERIALS = {}
+TEXTURES = {}
+TEXTURE_NODES = {}
+HERE = os.path.dirname(os.path.abspath(__file__)) if "__file__" in globals() else os.getcwd()
+
+
+def _image(nodes, name, colour_space):
+    tex = nodes.new("ShaderNodeTexImage")
+    path = name if os.path.isabs(name) else os.path.join(HERE, name)
+    import bpy
+    tex.image = bpy.data.images.load(path, check_existing=True)
+    tex.image.colorspace_settings.name = colour_space
+    return tex
+
+
+def _material(bpy, name, inputs, textures):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL") if any(
+        n.type == "OUTPUT_MATERIAL" for n in nodes) else nodes.new("ShaderNodeOutputMaterial")
+    for n in [n for n in nodes if n.name != out.name]:
+        nodes.remove(n)
+    bsdf = nodes.new("ShaderNodeBsdfPrincipled")
+    for key, value in inputs.items():
+        bsdf.inputs[key].default_value = list(value) + [1.0] if isinstance(value, list) else value
+    if "Anisotropic" in inputs:       # the UV map's tangent, as glTF's anisotropy direction
+        tangent = nodes.new("ShaderNodeTangent")
+        tangent.direction_type = "UV_MAP"
+        links.new(tangent.outputs["Tangent"], bsdf.inputs["Tangent"])
+    for stmt, file in textures.items():
+        socket, space = TEXTURE_NODES[stmt]
+        tex = _image(nodes, file, space)
+        if socket == "Base Color":    # MTL and glTF multiply the map by the colour
+            mix = nodes.new("ShaderNodeMix")
+            mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+            mix.inputs["Factor"].default_value = 1.0
+            mix.inputs[6].default_value = [1.0, 1.0, 1.0, 1.0]    # white where the map is unlinked
+            mix.inputs[7].default_value = list(inputs["Base Color"]) + [1.0]
+            links.new(tex.outputs["Color"], mix.inputs[6])
+            links.new(mix.outputs[2], bsdf.inputs["Base Color"])
+        elif socket == "Bump":
+            bump = nodes.new("ShaderNodeBump")
+            links.new(tex.outputs["Color"], bump.inputs["Height"])
+            links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+        else:
+            nm = nodes.new("ShaderNodeNormalMap")
+            links.new(tex.outputs["Color"], nm.inputs["Color"])
+            links.new(nm.outputs["Normal"], bsdf.inputs["Normal"])
+    links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    mat.use_fake_user = True
+    return mat
+
+
+def build_all(bpy):
+    return [_material(bpy, name, inputs, TEXTURES.get(name, {})) for name, inputs in MATERIALS.items()]
+
+
+def build(bpy):
+    return build_all(bpy)[0]
+
+
+if __name__ == "__main__":
+    import bpy
+    build_all(bpy)
+'''
