@@ -79,3 +79,16 @@ def disk_full_at(monkeypatch):
         monkeypatch.setattr(plausible.text, "open", full, raising=False)
 
     return install
+
+
+@pytest.fixture(scope="session")
+def blender():
+    """Blender's interpreter (``.venv-blender``, made by ``make setup``); the tests that need it skip,
+    saying so, only where it is absent. (Here, not in tests/blender/conftest.py: a second module named
+    ``conftest`` would shadow this one for the tests that import its helpers.)"""
+    from plausible.blender import BlenderUnavailable, blender_python
+
+    try:
+        return blender_python()
+    except BlenderUnavailable as e:
+        pytest.skip(str(e))
