@@ -1,4 +1,5 @@
-"""Issue 45, item 1: the albedo's error bound is a promise.  Ashikhmin-Shirley lobes
+"""Issue 45, item 1: the albedo's error bound is a promise.  Cook-Torrance's V-groove against
+:func:`reference.ct_vgroove_albedo` (its kinks); Ashikhmin-Shirley lobes
 (anisotropic up to ``nu, nv = 0 / 1e6``, grazing down to ``cos(theta_i) = 1e-6``)
 against an independent integral of the closed form (:func:`reference.as_specular_albedo`,
 itself checked against the issue's exact values): the true error lies within the
@@ -12,7 +13,7 @@ import plausible
 from plausible.analysis import albedo
 from plausible.models.sum import Sum
 
-from reference import as_specular_albedo
+from reference import as_specular_albedo, ct_vgroove_albedo
 
 
 def _wi(cos_i, phi):
@@ -51,3 +52,38 @@ def test_a_model_with_the_max_cos_kink_says_so_and_its_sums_and_bases_pass_it_on
     assert not plausible.make("cook-torrance").level_kink()
     assert Sum([plausible.make("ashikhmin-shirley-specular"), plausible.make("lambertian")]).level_kink()
     assert plausible.make("pumped-up:base=[reciprocal-phong:n=20]").level_kink()   # max(a(L), a(V))
+
+
+def test_the_vgroove_reference_integral_gives_the_issues_exact_value():
+    # issue 45 / docs/analysis.md: 0.9515761567 by a nested adaptive quadrature of eval (12 minutes)
+    assert ct_vgroove_albedo(0.01, 0.02) == pytest.approx(0.9515761567, abs=1e-9)
+
+
+#: (m, cos(theta_i)): each outside its bound before the V-groove's kinks were panel edges
+#: (true error / bound 1.05, 1.39, 4.8: the issue's case first), and two rough ones whose
+#: bound needs the azimuth where the wi term's kink enters (5.6x with the curves as panel edges
+#: but not that azimuth)
+VGROOVE = [(0.01, 0.02), (0.03, 1e-3), (0.1, 1e-3), (1.0, 0.02), (1.0, 1e-3)]
+
+
+@pytest.mark.parametrize("m,c", VGROOVE)
+def test_cook_torrance_vgroove_albedo_lies_within_its_bound_and_the_default_tol(m, c):
+    wi = _wi(c, 0.0)
+    exact = ct_vgroove_albedo(m, c)
+    r = albedo(plausible.make(f"cook-torrance:m={m:g}:rs=1"), wi)
+    assert abs(r.value - exact) <= r.error
+    assert r.error <= 1e-6
+
+
+def test_the_vgroove_declares_its_kinks_and_sums_and_bases_pass_them_on():
+    import numpy as np
+
+    wi = np.array(_wi(0.02, 0.0))
+    phi = np.linspace(-3.0, 3.0, 7)
+    ct = plausible.make("cook-torrance:m=0.3")
+    curves = ct.kink_curves(wi, phi)
+    assert len(curves) == 2 and np.isfinite(curves[1]).all()        # the wo term's: at every azimuth
+    assert len(ct.kink_azimuths(wi)) == 2
+    assert plausible.make("cook-torrance:m=0.3:geometry=none").kink_curves(wi, phi) == []
+    assert len(Sum([ct, plausible.make("lambertian")]).kink_curves(wi, phi)) == 2
+    assert len(plausible.make("kulla-conty:base=[cook-torrance:m=0.3]").kink_azimuths(wi)) == 2

@@ -11,7 +11,7 @@ import pytest
 import plausible
 from plausible.analysis import albedos, direction
 
-from reference import as_specular_albedo_at_normal, halfvector_albedo
+from reference import as_specular_albedo_at_normal, ct_vgroove_albedo, halfvector_albedo
 
 pytestmark = pytest.mark.slow
 
@@ -73,7 +73,11 @@ def test_narrow_microfacet_lobes_agree_with_the_half_vector_reference(name, kw, 
     m = plausible.make(name, **kw)
     t = math.radians(theta)
     q = albedos(m, [direction(t, math.pi)])[0]
-    assert abs(q.value - halfvector_albedo(m, t, width, n=300)) <= q.error + 1e-6
+    if name == "cook-torrance":     # the exact integral of the closed form, kinks of G included: within the
+        # bound itself (the fixed 300-node rule, blind to G's kinks, errs by up to 1.3e-6 at grazing)
+        assert abs(q.value - ct_vgroove_albedo(width, math.cos(t))) <= q.error
+    else:
+        assert abs(q.value - halfvector_albedo(m, t, width, n=300)) <= q.error + 1e-6
 
 
 @pytest.mark.parametrize("nu,nv", list(itertools.product((0.0, 1.0, 100.0, 1e4, 1e6), repeat=2)))

@@ -19,6 +19,7 @@ import hashlib
 import html
 import json
 import os
+import resource
 import shutil
 import tempfile
 import time
@@ -129,6 +130,14 @@ def _dir_mode() -> int:
     return 0o777 & ~mask
 
 
+def cpu_seconds() -> float:
+    """User + system CPU seconds of this process (all its threads: Dr.Jit's pool included) and of its
+    children that have ended, from ``getrusage``: what a figure costs on a machine whose cores are
+    shared, where its wall time depends on the load."""
+    return sum(u.ru_utime + u.ru_stime for u in (resource.getrusage(resource.RUSAGE_SELF),
+                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
+
+
 def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict:
     """Make the :class:`~plausible.figures.Figure` ``fig`` into ``out/NAME`` (through a
     partial folder, see the module docstring) and return its ``figure.json``
@@ -142,7 +151,7 @@ def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict
         os.chmod(tmp, _dir_mode())      # mkdtemp makes 0700: the figure folder follows the umask
         ctx = Context(tmp, resolution=resolution, spp=spp, quick=quick,
                       progress=lambda total, label="", _n=name: start(progress, total, _n))
-        t0 = time.time()
+        t0, c0 = time.time(), cpu_seconds()
         m = dict(name=name, title=fig.title, source=fig.source, caption=fig.caption, params=fig.params,
                  key=key, resolution=ctx.base_res, spp=ctx.base_spp, quick=quick, renders=fig.renders,
                  variant=render_variant(fig))
@@ -154,7 +163,7 @@ def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict
             m["error"] = traceback.format_exc()
         ctx.finish()
         m.update(items=ctx.items, measurements=ctx.measurements, notes=ctx.notes,
-                 seconds=round(time.time() - t0, 1), cached=False)
+                 seconds=round(time.time() - t0, 1), cpu_seconds=round(cpu_seconds() - c0, 1), cached=False)
         (tmp / "figure.json").write_text(json.dumps(m, indent=1))
         _replace(tmp, d)
         tmp = None
@@ -167,14 +176,16 @@ def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict
 def _report(console, name, m):
     if m["status"] != "ok":
         console.print(f"[red]figure {escape(name)} failed:[/red]\n{escape(m.get('error', ''))}")
-    console.print(f"{escape(name):<22} {m['status']} {m['seconds']} s")
+    cpu = f" ({m['cpu_seconds']} CPU-s)" if "cpu_seconds" in m else ""
+    console.print(f"{escape(name):<22} {m['status']} {m['seconds']} s{cpu}")
 
 
 def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, console=None,
         progress=None, jobs: int = 1) -> dict:
     """Make the figures (all, or the names in ``only``) into ``out`` and write
     ``out/index.html``.  Returns ``{name: figure.json contents}`` in report order;
-    each has ``status`` ("ok" or "failed"), ``cached`` and ``seconds``.
+    each has ``status`` ("ok" or "failed"), ``cached``, ``seconds`` and (made in this run or one since
+    CPU time was recorded) ``cpu_seconds`` (:func:`cpu_seconds`).
 
     ``spp`` / ``resolution`` override the samples per pixel / base image size
     (defaults :data:`plausible.figures.DEFAULT_SPP` / ``DEFAULT_RESOLUTION``);
@@ -231,10 +242,15 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     bad = [x for x in checks if not x["ok"]]
     unmeasured = sum(1 for m in results.values() for x in m.get("measurements", []) if x.get("unmeasured"))
     console.print(f"{len(results)} figures ({sum(m.get('cached', False) for m in results.values())} cached, "
-                  f"{len(failed)} failed) in {total} s; {len(checks) - len(bad)}/{len(checks)} measured "
+                  f"{len(failed)} failed) in {total} s ({_cpu_made(results)} CPU-s making them); {len(checks) - len(bad)}/{len(checks)} measured "
                   f"checks hold" + (f", {unmeasured} not measured at this quality" if unmeasured else "")
                   + f" -> {escape(str(out / 'index.html'))}")
     return results
+
+
+def _cpu_made(results) -> float:
+    """CPU seconds of the figures made (not cached) in this run, summed."""
+    return round(sum(m.get("cpu_seconds", 0.0) for m in results.values() if not m.get("cached")), 1)
 
 
 # -- worker processes -----------------------------------------------------------------

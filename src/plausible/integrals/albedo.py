@@ -105,6 +105,8 @@ class _Rules:
         self.lune = bool(cut()) if callable(cut) else False
         kink = getattr(model, "level_kink", None)
         self.kink = bool(kink()) if callable(kink) else False
+        self.curves = callable(getattr(model, "kink_curves", None))     # BxDF.kink_curves: more kinks
+        self.curves = self.curves and callable(getattr(model, "kink_azimuths", None))
         self._breaks = {}
         self._nodes = {}
         self.sums = {}
@@ -121,7 +123,9 @@ class _Rules:
     def _make_nodes(self, m, refine):
         if refine not in self._breaks:
             self._breaks[refine] = half_vector_breaks(self.wi, self.model.peak_directions(self.wi),
-                                                      self.levels, refine, axes=self.axes, lune=self.lune)
+                                                      self.levels, refine, axes=self.axes, lune=self.lune,
+                                                      azimuths=self.model.kink_azimuths(self.wi)
+                                                      if self.curves else ())
         sb, pb = self._breaks[refine]
         s, ws = panel_rule(sb, m)
         p, wp = panel_rule(pb, m)
@@ -131,6 +135,8 @@ class _Rules:
             cuts.append(half_vector_lune(self.wi, p))
         if self.kink:
             cuts.append(half_vector_level(self.wi, p))
+        if self.curves:
+            cuts.extend(np.asarray(c, dtype=np.float64) for c in self.model.kink_curves(self.wi, p))
         if not cuts:
             return s, ws, p, wp, np.zeros_like(p), tmax
         edges = np.sort(np.vstack([np.zeros_like(p)] + [np.minimum(c, tmax) for c in cuts] + [tmax]), axis=0)
@@ -411,7 +417,7 @@ def quadrature_reach(model, wi, *, levels: int = 13, probes: int = 10_000, axes:
     if wi[2] <= 0:
         return math.pi
     rules = _Rules(model, wi, levels, (not is_isotropic(model)) if axes is None else axes)
-    rules.lune = rules.kink = False
+    rules.lune = rules.kink = rules.curves = False
     s, _, p, _, _, tmax = rules.nodes(ORDERS[1], 2)
     k = np.arange(probes) + 0.5
     z = 1.0 - k / probes                       # a Fibonacci lattice on the upper hemisphere

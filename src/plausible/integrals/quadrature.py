@@ -172,6 +172,34 @@ def half_vector_level(wi, phi):
     return np.maximum(delta, 0.0)
 
 
+def half_vector_vgroove(wi, phi, iterations: int = 60):
+    """Polar angles ``(t_i, t_o)`` of the half vector, for each azimuth ``phi``, where the
+    V-groove shadowing ``G = min(1, 2 (n.h)(n.wo) / (wo.h), 2 (n.h)(n.wi) / (wi.h))``
+    (Cook & Torrance 1982) has its kinks: where the ``wi`` term reaches 1 (``t_i``) and where
+    the ``wo`` term does (``t_o``); ``inf`` where a curve misses the azimuth's range
+    ``[0, tmax]`` (:func:`half_vector_tmax`).
+
+    With ``wi.h = R cos(t - delta)`` (``R``, ``delta`` of :func:`half_vector_tmax`):
+    the ``wi`` term is 1 where ``ci cos t = sin(theta_i) cos(psi) sin t``, ``t_i = pi/2 - delta``,
+    inside the range only for ``delta > pi/6``; the ``wo`` term (``n.wo = 2 (wi.h) cos t - ci``)
+    where ``(wi.h)(4 cos^2 t - 1) = 2 ci cos t``, which is ``ci > 0`` at ``t = 0`` and ``-(wi.h) < 0``
+    at the horizon: found by ``iterations`` bisections (to ``2^-60`` of the range)."""
+    ti, pi_ = _angles(wi)
+    ci, si = math.cos(ti), math.sin(ti)
+    c_psi = np.cos(np.asarray(phi, dtype=np.float64) - pi_)
+    delta = np.arctan2(si * c_psi, ci)
+    r = np.hypot(si * c_psi, ci)
+    tmax = 0.25 * math.pi + 0.5 * delta
+    t_i = np.where(delta > math.pi / 6, 0.5 * math.pi - delta, np.inf)
+    lo, hi = np.zeros_like(tmax), tmax.copy()
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        c = np.cos(mid)
+        above_ = r * np.cos(mid - delta) * (4.0 * c * c - 1.0) - 2.0 * ci * c > 0.0
+        lo, hi = np.where(above_, mid, lo), np.where(above_, hi, mid)
+    return t_i, 0.5 * (lo + hi)
+
+
 def half_vector_rule(wi, peaks=(), m: int = 3, levels: int = 4, pole_levels: int = 10):
     """A fixed rule for ``int g(wo) d omega_o`` over the upper hemisphere in the
     half-vector frame of :func:`half_vector_breaks` (no tangent axes, no lune):
@@ -210,7 +238,7 @@ def _merge(lo, hi, pts):
 
 
 def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels: int = POLE_LEVELS,
-                       axes: bool = True, lune: bool = False):
+                       axes: bool = True, lune: bool = False, azimuths=()):
     """Panel breakpoints ``(s_breaks, phi_breaks)`` of the half-vector frame for the
     incidence ``wi`` (unit, ``wi_z > 0``) and lobe ``peaks``.
 
@@ -233,7 +261,9 @@ def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels
     down to that width.  With ``lune`` also toward the azimuths of the two half
     vectors where the circle ``R.wo = 0`` meets the horizon (``wo`` at
     ``phi_i +- pi/2``), where the cut :func:`half_vector_lune` leaves the domain
-    (a kink of the panels' outer edge ``min(T, tmax)``)."""
+    (a kink of the panels' outer edge ``min(T, tmax)``), and toward each of ``azimuths``
+    (:meth:`~plausible.bxdf.BxDF.kink_azimuths`: where a kink curve enters the range, the
+    same kind of edge)."""
     ti, pi_ = _angles(wi)
     lo, hi = pi_ - math.pi, pi_ + math.pi
     # toward the horizon four levels deeper per floor refinement (seen by the refinement's
@@ -266,6 +296,7 @@ def half_vector_breaks(wi, peaks, levels: int = 13, refine: int = 1, pole_levels
             a = pi_ + sg * 0.5 * math.pi
             h = wi + np.array([math.cos(a), math.sin(a), 0.0])
             p_centres.append((math.atan2(h[1], h[0]), levels))
+    p_centres += [(float(a), levels) for a in azimuths]
     for c, lv in p_centres:    # each centre and its images a period away (a centre on the seam grades both ends)
         c = lo + (c - lo) % (2 * math.pi)
         p_pts += [_grade(c + k * 2 * math.pi, lo, hi, lv) for k in (-1, 0, 1)]

@@ -23,6 +23,8 @@ Jacobian (Walter et al. 2007, eq. 20) gives the ``1/4`` used here.
 
 from __future__ import annotations
 
+import numpy as np
+
 from .. import fresnel, vec, warps
 from ..bxdf import BxDF
 from ..arrays.ops import PI
@@ -120,6 +122,39 @@ class CookTorrance(BxDF):
         F = fresnel.weight(ops, p.fresnel, kh, p.rs, p.eta, p.k)
         d = blinn_d(ops, h, p.m) if p.distribution == "blinn" else beckmann_d(ops, h, p.m)
         return ops.where(ok, F * d * g / (4.0 * ci * co), 0.0)
+
+    def kink_curves(self, wi, phi):
+        """The V-groove's two kinks (:func:`~plausible.integrals.quadrature.half_vector_vgroove`),
+        each left out where the distribution there is below ``exp(-60)`` of its peak (the
+        exponent ``tan^2 t / m^2``, Blinn's ``-n log cos t``): a kink in a lobe's far tail
+        moves no digit of the albedo and would only cost nodes."""
+        if self.params["geometry"] != "vgroove":
+            return []
+        from ..integrals.quadrature import half_vector_vgroove
+
+        m = float(np.max(self.params["m"]))
+        out = []
+        for t in half_vector_vgroove(wi, phi):
+            with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+                if self.params["distribution"] == "blinn":
+                    tail = -blinn_exponent(m) * np.log(np.cos(t))
+                else:
+                    tail = np.tan(t) ** 2 / (m * m)
+            out.append(np.where(np.isfinite(t) & (tail < 60.0), t, np.inf))
+        return out
+
+    def kink_azimuths(self, wi):
+        """Where the ``wi`` term's kink enters the range: ``delta = pi/6``
+        (:func:`~plausible.integrals.quadrature.half_vector_vgroove`), at ``psi = +-acos(cot(theta_i) / sqrt(3))``
+        from the incidence's azimuth (beyond 60 degrees of incidence); the ``wo`` term's is inside at every azimuth."""
+        if self.params["geometry"] != "vgroove":
+            return []
+        wi = np.asarray(wi, dtype=np.float64)
+        si, ci = float(np.hypot(wi[0], wi[1])), float(wi[2])
+        if si <= np.sqrt(3.0) * ci:
+            return []
+        psi, phi_i = float(np.arccos(ci / (np.sqrt(3.0) * si))), float(np.arctan2(wi[1], wi[0]))
+        return [phi_i - psi, phi_i + psi]
 
     def _pdf(self, ops, wi, wo, q):
         if q.distribution == "blinn":

@@ -232,6 +232,12 @@ class Sum(BxDF):
     def level_kink(self):
         return any(m.level_kink() for m in self.parts)
 
+    def kink_curves(self, wi, phi):
+        return [c for m in self.parts for c in m.kink_curves(wi, phi)]
+
+    def kink_azimuths(self, wi):
+        return [a for m in self.parts for a in m.kink_azimuths(wi)]
+
     def terms(self, scale=None) -> list:
         """``[(model, scale or None), ...]``: the parts, a nested sum's own terms in its place, each
         scale times ``scale`` (a sum of sums is the sum of all their terms)."""
