@@ -106,7 +106,7 @@ def _sleep(ctx):
 
 
 def _strip(m):
-    return {k: v for k, v in m.items() if k not in ("seconds", "cached", "measurements")}
+    return {k: v for k, v in m.items() if k not in ("seconds", "cpu_seconds", "cached", "measurements")}
 
 
 def _numbers(text):

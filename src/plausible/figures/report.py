@@ -242,7 +242,8 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
     bad = [x for x in checks if not x["ok"]]
     unmeasured = sum(1 for m in results.values() for x in m.get("measurements", []) if x.get("unmeasured"))
     console.print(f"{len(results)} figures ({sum(m.get('cached', False) for m in results.values())} cached, "
-                  f"{len(failed)} failed) in {total} s ({_cpu_made(results)} CPU-s making them); {len(checks) - len(bad)}/{len(checks)} measured "
+                  f"{len(failed)} failed) in {total} s ({_cpu_made(results)} CPU-s making them);")
+    console.print(f"{len(checks) - len(bad)}/{len(checks)} measured "
                   f"checks hold" + (f", {unmeasured} not measured at this quality" if unmeasured else "")
                   + f" -> {escape(str(out / 'index.html'))}")
     return results
