@@ -90,10 +90,33 @@ def test_rule_pairs_sharing_nodes_sum_as_the_whole_grids(spec, backend_name):
     rules = [_Rules(m, wi, 13, not is_isotropic(m)) for wi in wis]
     requests = [(a, 6, r) for a in range(len(wis)) for r in (1, 2)]
     pieces, _ = _pieces(rules, requests)
-    whole = sum(len(rules[a].nodes(k, r)[0]) * len(rules[a].nodes(k, r)[2]) for a, k, r in requests)
+    whole = sum(len(g[0]) * len(g[2]) for a, k, r in requests for g in rules[a].nodes(k, r))
     assert sum(len(g[0]) * len(g[2]) for _, g in pieces) < 0.9 * whole
     with plausible.use_backend(backend_name):
         _sums(m, "f", rules, requests)
     for a, k, r in requests:
-        ref = _grid_sum(m, "f", wis[a], rules[a].nodes(k, r))
+        ref = sum(_grid_sum(m, "f", wis[a], g) for g in rules[a].nodes(k, r))
         np.testing.assert_allclose(rules[a].sums[(k, r)], ref, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("spec", ["ashikhmin-shirley:nu=12:nv=90", "phong:n=0", "cook-torrance:m=0.2"])
+def test_the_polar_segments_tile_each_azimuth_once_and_none_is_empty(spec):
+    """The rule's grids (a kink, a lune or the V-groove's curves cut the polar range): every column's
+    segment has a length, and the segments of each azimuth add up to its whole range ``tmax``
+    (``quadrature.half_vector_tmax``); a segment far from the pole takes the light rule, whose
+    first panel is no longer than its distance to the pole."""
+    from plausible.integrals.albedo import LIGHT_POLE_LEVELS, _Rules
+    from plausible.integrals.quadrature import half_vector_tmax
+
+    m = plausible.make(spec)
+    for t, p in ((30, 20), (60, 30), (89.9, 10)):
+        wi = direction(math.radians(t), math.radians(p))
+        rules = _Rules(m, wi, 13, not is_isotropic(m))
+        grids = rules.nodes(6, 2)
+        phi = np.concatenate([g[2] for g in grids])
+        span = np.concatenate([g[5] for g in grids])
+        assert np.all(span > 0.0)
+        keys, inv = np.unique(phi, return_inverse=True)
+        np.testing.assert_allclose(np.bincount(inv, weights=span), half_vector_tmax(wi, keys), rtol=1e-13)
+        for g in grids[1:]:
+            assert np.all(g[4] >= g[5] * 0.5 ** LIGHT_POLE_LEVELS)

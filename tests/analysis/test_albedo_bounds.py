@@ -87,3 +87,26 @@ def test_the_vgroove_declares_its_kinks_and_sums_and_bases_pass_them_on():
     assert plausible.make("cook-torrance:m=0.3:geometry=none").kink_curves(wi, phi) == []
     assert len(Sum([ct, plausible.make("lambertian")]).kink_curves(wi, phi)) == 2
     assert len(plausible.make("kulla-conty:base=[cook-torrance:m=0.3]").kink_azimuths(wi)) == 2
+
+
+@pytest.mark.parametrize("c", (1.0, 0.7, 0.2, 0.02, 1e-4))
+def test_the_vgroove_kinks_in_closed_form_are_where_each_shadowing_term_reaches_one(c):
+    import numpy as np
+
+    from plausible.integrals.quadrature import half_vector_vgroove
+
+    from reference import _vgroove_wo_kink
+
+    s = math.sqrt(1.0 - c * c)
+    wi = np.array([s * math.cos(0.4), s * math.sin(0.4), c])
+    phi = np.linspace(-3.1, 3.1, 41)
+    t_i, t_o = half_vector_vgroove(wi, phi)
+    for p, ti, to in zip(phi, t_i, t_o):
+        a = s * math.cos(p - 0.4)
+        delta, r = math.atan2(a, c), math.hypot(a, c)
+        assert to == pytest.approx(_vgroove_wo_kink(c, r, delta, 0.25 * math.pi + 0.5 * delta), abs=1e-12)
+        if math.isfinite(ti):   # 2 (n.h)(n.wi) = wi.h there, inside the range
+            assert 2.0 * math.cos(ti) * c == pytest.approx(r * math.cos(ti - delta), abs=1e-12)
+            assert ti < 0.25 * math.pi + 0.5 * delta
+        else:                   # the term stays above 1 up to the horizon
+            assert delta <= math.pi / 6 + 1e-15

@@ -296,3 +296,27 @@ def test_an_exr_is_written_with_one_drjit_thread(tmp_path):
     assert out.returncode == 0, out.stderr
     assert out.stdout.split()[-1] == "1"
     assert (tmp_path / "img.exr").exists() and (tmp_path / "img.png").exists()
+
+
+def _busy(ctx, seconds, spin):
+    """Spend ``seconds``: of CPU time computing (``spin``; a loaded machine stretches its wall
+    time, not its CPU time), or of wall time asleep."""
+    clock = time.process_time if spin else time.perf_counter
+    end = clock() + seconds
+    while clock() < end:
+        if not spin:
+            time.sleep(0.01)
+
+
+def test_each_figure_records_its_cpu_seconds_apart_from_its_wall_time(tmp_path, monkeypatch):
+    """``cpu_seconds`` is the process's CPU time (getrusage), not the wall clock: a figure that
+    sleeps 0.4 s records ~0 of it, one that computes 0.4 s records ~0.4 (a machine's load makes
+    the wall time longer, not the CPU time)."""
+    F.names()
+    for name, spin in (("sleeper", False), ("spinner", True)):
+        monkeypatch.setitem(F.FIGURES, name, F.Figure(name, name, "test", "caption", _busy,
+                                                      dict(seconds=0.4, spin=spin)))
+    res = run(tmp_path, only=["sleeper", "spinner"], jobs=1)
+    assert res["sleeper"]["seconds"] >= 0.4 and res["sleeper"]["cpu_seconds"] <= 0.15
+    assert res["spinner"]["cpu_seconds"] >= 0.3
+    assert json.loads((tmp_path / "spinner" / "figure.json").read_text())["cpu_seconds"] == res["spinner"]["cpu_seconds"]

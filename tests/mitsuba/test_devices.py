@@ -16,6 +16,7 @@ import pytest
 from mi_helpers import VARIANT, dr, mi
 
 from plausible.analysis.mitsuba_bsdf import device_exact
+from plausible.arrays import backend
 from plausible.mitsuba import variant
 
 
@@ -26,7 +27,7 @@ def _cli(*args, env=None):
 
 def test_the_preferred_variant_is_cuda_only_where_a_gpu_runs(monkeypatch):
     monkeypatch.delenv(variant.ENV, raising=False)
-    gpu = variant.device_runs("cuda")
+    gpu = backend.device_available("cuda")
     assert variant.preferred("rgb") == ("cuda_ad_rgb" if gpu else "llvm_ad_rgb")
     assert variant.preferred("spectral") == ("cuda_ad_spectral" if gpu else "llvm_ad_spectral")
     monkeypatch.setattr(variant, "available", lambda: ("cuda_ad_rgb", "cuda_ad_spectral", "llvm_ad_rgb"))
@@ -39,6 +40,17 @@ def test_the_preferred_variant_is_cuda_only_where_a_gpu_runs(monkeypatch):
     assert variant.ENV not in os.environ
 
 
+def test_the_variants_ask_the_backend_floor_which_devices_run(monkeypatch):
+    """One probe of Dr.Jit's devices (``arrays.backend.device_available``) for the float64 backend and
+    the Mitsuba variants: what it refuses renders no variant but a scalar one."""
+    built = set(mi.variants())
+    monkeypatch.setattr(backend, "device_available", lambda name: False)
+    assert set(variant.available()) == {v for v in built if v.startswith("scalar_")}
+    monkeypatch.setattr(backend, "device_available", lambda name: name == "llvm")
+    assert set(variant.available()) == {v for v in built if v.startswith(("scalar_", "llvm_"))}
+    assert not hasattr(variant, "device_runs")
+
+
 def test_a_variant_that_cannot_render_here_is_refused_naming_the_choices(monkeypatch):
     monkeypatch.setattr(variant, "available", lambda: ("llvm_ad_rgb", "scalar_rgb"))
     with pytest.raises(ValueError, match=r"variant 'cuda' cannot render on this machine \(no NVIDIA GPU"):
@@ -47,7 +59,7 @@ def test_a_variant_that_cannot_render_here_is_refused_naming_the_choices(monkeyp
         variant.prefer("vulkan")
 
 
-@pytest.mark.skipif(variant.device_runs("cuda"), reason="this machine has a GPU")
+@pytest.mark.skipif(backend.device_available("cuda"), reason="this machine has a GPU")
 def test_the_command_line_refuses_cuda_without_a_gpu_and_says_what_it_has():
     r = _cli("figures", "--variant", "cuda", "--list")
     assert r.returncode == 2 and "no NVIDIA GPU or driver found" in r.stderr and "llvm_ad_rgb" in r.stderr

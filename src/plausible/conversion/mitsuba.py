@@ -457,7 +457,7 @@ def _lsq(F, Alb, g, A, eps, metric, band=None):
             wa = lam / np.where(ok, A[:, c], 1.0) * ok
             rows = np.concatenate([F[1:].T * w[:, None], Alb[1:].T * wa[:, None]])
             rhs = np.concatenate([(g[:, c] - F[0]) * w, (A[:, c] - Alb[0]) * wa])
-        x[:, c] = lsq_linear(rows, rhs, bounds=(0.0, 1.0)).x
+        x[:, c] = lsq_linear(rows, rhs, bounds=(0.0, 1.0), method="bvls").x   # active set: exact, ~10x faster than trf here
         if band is not None:
             x[:, c] = _within_band(rows, rhs, Alb, A[:, c], band, x[:, c])
     return x

@@ -86,6 +86,11 @@ ORDERS = (4, 6, 8, 12, 16)
 MAX_REFINE = 4
 #: Default accuracy asked of :func:`albedo` (absolute, on the error bound).
 TOL = 1e-6
+#: A polar segment that starts at a cut (a lune, a kink) at least ``2^-LIGHT_POLE_LEVELS`` of its
+#: length away from the mirror direction takes the ``s`` rule without the pole's finer grading: its
+#: panels near its start are then no larger than their distance to the pole, as the whole rule's
+#: are near ``s = 0`` (:meth:`_Rules.nodes`).
+LIGHT_POLE_LEVELS = 6
 
 
 class _Rules:
@@ -112,10 +117,15 @@ class _Rules:
         self.sums = {}
 
     def nodes(self, m, refine):
-        """``(s, ws, phi, wp, t0, span)``: the nodes and weights in ``s`` and ``phi``
-        and the polar range ``[t0, t0 + span]`` of each azimuth node (the node of
-        ``(s, phi)`` is the half vector at polar angle ``t0 + s span``; see
-        :func:`_grid_sum`).  Computed once per ``(m, refine)`` (callers only read them)."""
+        """The tensor grids of the rule ``(m, refine)``, a list of ``(s, ws, phi, wp, t0, span)``:
+        the nodes and weights in ``s`` and ``phi`` and the polar range ``[t0, t0 + span]`` of each
+        azimuth node (the node of ``(s, phi)`` is the half vector at polar angle ``t0 + s span``;
+        see :func:`_grid_sum`).  The first grid holds every azimuth's first polar segment (and
+        the later segments that start near the pole); a second, where there are cuts, the
+        later segments that start farther than ``2^-LIGHT_POLE_LEVELS`` of their length from the
+        pole, on the ``s`` rule without the pole's finer levels (the whole rule's panels there
+        would be far smaller than their distance to the pole: half of a split column's nodes).
+        Computed once per ``(m, refine)`` (callers only read them)."""
         if (m, refine) not in self._nodes:
             self._nodes[(m, refine)] = self._make_nodes(m, refine)
         return self._nodes[(m, refine)]
@@ -130,6 +140,34 @@ class _Rules:
         s, ws = panel_rule(sb, m)
         p, wp = panel_rule(pb, m)
         tmax = half_vector_tmax(self.wi, p)
+        cuts = self._cuts(p)
+        if not cuts:
+            return [(s, ws, p, wp, np.zeros_like(p), tmax)]
+        edges = np.sort(np.vstack([np.zeros_like(p)] + [np.minimum(c, tmax) for c in cuts] + [tmax]), axis=0)
+        on = edges[1] > 0.0         # an azimuth's first segment, where not empty (a cut at the pole: none)
+        first = (s, ws, p[on], wp[on], np.zeros(int(on.sum())), edges[1][on])
+        cols = [hi_ > lo_ * (1.0 + 1e-15) for lo_, hi_ in zip(edges[1:-1], edges[2:])]
+        t0 = np.concatenate([lo_[c] for lo_, c in zip(edges[1:-1], cols)])
+        span = np.concatenate([(hi_ - lo_)[c] for lo_, hi_, c in zip(edges[1:-1], edges[2:], cols)])
+        pc, wpc = np.concatenate([p[c] for c in cols]), np.concatenate([wp[c] for c in cols])
+        far = t0 >= span * 0.5 ** LIGHT_POLE_LEVELS       # far from the pole: the light rule
+        near = (pc[~far], wpc[~far], t0[~far], span[~far])
+        first = (s, ws, np.concatenate([first[2], near[0]]), np.concatenate([first[3], near[1]]),
+                 np.concatenate([first[4], near[2]]), np.concatenate([first[5], near[3]]))
+        if not far.any():
+            return [first]
+        sl, wsl = panel_rule(self.light_breaks(refine), m)
+        return [first, (sl, wsl, pc[far], wpc[far], t0[far], span[far])]
+
+    def light_breaks(self, refine):
+        """The ``s`` breakpoints of :meth:`nodes`' second grid: the rule's, less those inside
+        ``(0, 2^-LIGHT_POLE_LEVELS)``."""
+        sb = self._breaks[refine][0]
+        return sb[(sb <= 0.0) | (sb >= 0.5 ** LIGHT_POLE_LEVELS)]
+
+    def _cuts(self, p):
+        """The polar angles at each azimuth of ``p`` where a segment ends: the lune, the
+        level kink, the model's kink curves."""
         cuts = []
         if self.lune:
             cuts.append(half_vector_lune(self.wi, p))
@@ -137,44 +175,40 @@ class _Rules:
             cuts.append(half_vector_level(self.wi, p))
         if self.curves:
             cuts.extend(np.asarray(c, dtype=np.float64) for c in self.model.kink_curves(self.wi, p))
-        if not cuts:
-            return s, ws, p, wp, np.zeros_like(p), tmax
-        edges = np.sort(np.vstack([np.zeros_like(p)] + [np.minimum(c, tmax) for c in cuts] + [tmax]), axis=0)
-        cols = [np.ones(len(p), dtype=bool)]        # every azimuth's first segment, then the others
-        for lo_, hi_ in zip(edges[1:-1], edges[2:]):
-            cols.append(hi_ > lo_ * (1.0 + 1e-15))
-        t0 = [edges[0]] + [lo_[c] for lo_, c in zip(edges[1:-1], cols[1:])]
-        first_end = edges[1]
-        span = [first_end] + [(hi_ - lo_)[c] for lo_, hi_, c in zip(edges[1:-1], edges[2:], cols[1:])]
-        return (s, ws, np.concatenate([p[c] for c in cols]), np.concatenate([wp[c] for c in cols]),
-                np.concatenate(t0), np.concatenate(span))
+        return cuts
 
     def shared(self, m, refine):
-        """Which nodes the rules ``(m, refine)`` and ``(m, 2 refine)`` share: ``(s1, c1, s2,
-        c2)``, boolean masks of the ``s`` nodes and the azimuth columns of each (the
-        order of :meth:`nodes`), true on the panels both floors have (the finer floor
-        splits some panels and keeps the others; a kept panel's nodes are the same
-        numbers).  None where the shared nodes do not match exactly."""
-        g1, g2 = self.nodes(m, refine), self.nodes(m, 2 * refine)
-        masks = []
-        for axis, col in ((0, False), (1, True)):
-            b1, b2 = self._breaks[refine][axis], self._breaks[2 * refine][axis]
-            k1 = set(zip(b1[:-1].tolist(), b1[1:].tolist()))
-            k2 = set(zip(b2[:-1].tolist(), b2[1:].tolist()))
-            both = k1 & k2
-            pair = []
-            for b, g in ((b1, g1), (b2, g2)):
-                on = np.repeat([(x, y) in both for x, y in zip(b[:-1].tolist(), b[1:].tolist())], m)
-                if col and len(g[2]) > len(on):      # the lune's second segments: columns p[out]
-                    p = panel_rule(b, m)[0]
-                    extra = np.isin(g[2][len(on):], p[on])
-                    on = np.concatenate([on, extra])
-                pair.append(on)
-            masks.append(pair)
-        (s1, s2), (c1, c2) = masks
-        same = (np.array_equal(g1[0][s1], g2[0][s2]) and np.array_equal(g1[1][s1], g2[1][s2])
-                and all(np.array_equal(g1[k][c1], g2[k][c2]) for k in range(2, 6)))
-        return (s1, c1, s2, c2) if same else None
+        """Which nodes the rules ``(m, refine)`` and ``(m, 2 refine)`` share, grid by grid of
+        :meth:`nodes`: a list of ``(s1, c1, s2, c2)``, boolean masks of the ``s`` nodes and the
+        azimuth columns of each, true on the panels both floors have (the finer floor splits
+        some panels and keeps the others; a kept panel's nodes are the same numbers).  None
+        where the two have not the same grids or the shared nodes do not match exactly."""
+        gs1, gs2 = self.nodes(m, refine), self.nodes(m, 2 * refine)
+        if len(gs1) != len(gs2):
+            return None
+        out = []
+        for j, (g1, g2) in enumerate(zip(gs1, gs2)):
+            sb = [self._breaks[r][0] if j == 0 else self.light_breaks(r) for r in (refine, 2 * refine)]
+            pb = [self._breaks[r][1] for r in (refine, 2 * refine)]
+            s1, s2 = _kept_nodes(sb[0], sb[1], m)
+            p1, p2 = _kept_nodes(pb[0], pb[1], m)
+            c1 = np.isin(g1[2], panel_rule(pb[0], m)[0][p1])     # an azimuth column on a kept panel
+            c2 = np.isin(g2[2], panel_rule(pb[1], m)[0][p2])
+            same = (np.array_equal(g1[0][s1], g2[0][s2]) and np.array_equal(g1[1][s1], g2[1][s2])
+                    and all(np.array_equal(g1[k][c1], g2[k][c2]) for k in range(2, 6)))
+            if not same:
+                return None
+            out.append((s1, c1, s2, c2))
+        return out
+
+
+def _kept_nodes(b1, b2, m):
+    """Boolean masks of the ``m``-point nodes of the panels ``b1`` and ``b2`` (breakpoints) on the
+    panels both have (the same two ends)."""
+    k1 = set(zip(b1[:-1].tolist(), b1[1:].tolist()))
+    k2 = set(zip(b2[:-1].tolist(), b2[1:].tolist()))
+    both = k1 & k2
+    return tuple(np.repeat([(x, y) in both for x, y in zip(b[:-1].tolist(), b[1:].tolist())], m) for b in (b1, b2))
 
 
 def _sums(model, kind, rules, requests):
@@ -222,32 +256,42 @@ def _pieces(rules, requests):
         fine = (a, m, 2 * r)
         masks = rules[a].shared(m, r) if fine in index else None
         if masks is None:
-            parts.append([len(pieces)])
-            pieces.append((a, rules[a].nodes(m, r)))
+            grids = rules[a].nodes(m, r)
+            parts.append(list(range(len(pieces), len(pieces) + len(grids))))
+            pieces += [(a, g) for g in grids]
             continue
-        s1, c1, s2, c2 = masks
-        g1, g2 = rules[a].nodes(m, r), rules[a].nodes(m, 2 * r)
-        mine = []
-        for g, sm, cm in ((g1, s1, c1), (g2, s2, c2)):
-            ids = []
-            for si, ci in ((~sm, slice(None)), (sm, ~cm)):
-                sub = _subgrid(g, si, ci)
-                if len(sub[0]) and len(sub[2]):
-                    ids.append(len(pieces))
-                    pieces.append((a, sub))
-            mine.append(ids)
-        shared = _subgrid(g1, s1, c1)
-        common = []
-        if len(shared[0]) and len(shared[2]):
-            common = [len(pieces)]
-            pieces.append((a, shared))
-        if not common + mine[0] or not common + mine[1]:     # nothing to sum: keep whole grids
-            mine = [[len(pieces)], [len(pieces) + 1]]
-            pieces += [(a, g1), (a, g2)]
-            common = []
-        parts.append(common + mine[0])
-        done[fine] = common + mine[1]
+        mine = [[], []]
+        for g1, g2, mk in zip(rules[a].nodes(m, r), rules[a].nodes(m, 2 * r), masks):
+            grids, ids1, ids2 = _split_pair(g1, g2, mk)
+            mine[0] += [len(pieces) + i for i in ids1]
+            mine[1] += [len(pieces) + i for i in ids2]
+            pieces += [(a, g) for g in grids]
+        parts.append(mine[0])
+        done[fine] = mine[1]
     return pieces, parts
+
+
+def _split_pair(g1, g2, masks):
+    """The pieces of one grid of the rules ``(m, r)`` and ``(m, 2 r)`` (:func:`_pieces`):
+    ``(grids, ids1, ids2)``, the sub-grids and which of them each rule's sum adds."""
+    s1, c1, s2, c2 = masks
+    grids, mine = [], []
+    for g, sm, cm in ((g1, s1, c1), (g2, s2, c2)):
+        ids = []
+        for si, ci in ((~sm, slice(None)), (sm, ~cm)):
+            sub = _subgrid(g, si, ci)
+            if len(sub[0]) and len(sub[2]):
+                ids.append(len(grids))
+                grids.append(sub)
+        mine.append(ids)
+    shared = _subgrid(g1, s1, c1)
+    common = []
+    if len(shared[0]) and len(shared[2]):
+        common = [len(grids)]
+        grids.append(shared)
+    if not common + mine[0] or not common + mine[1]:     # nothing to sum: keep whole grids
+        grids, mine, common = [g1, g2], [[0], [1]], []
+    return grids, common + mine[0], common + mine[1]
 
 
 def _subgrid(g, s_mask, col_mask):
@@ -418,7 +462,7 @@ def quadrature_reach(model, wi, *, levels: int = 13, probes: int = 10_000, axes:
         return math.pi
     rules = _Rules(model, wi, levels, (not is_isotropic(model)) if axes is None else axes)
     rules.lune = rules.kink = rules.curves = False
-    s, _, p, _, _, tmax = rules.nodes(ORDERS[1], 2)
+    s, _, p, _, _, tmax = rules.nodes(ORDERS[1], 2)[0]
     k = np.arange(probes) + 0.5
     z = 1.0 - k / probes                       # a Fibonacci lattice on the upper hemisphere
     a = k * math.pi * (3.0 - math.sqrt(5.0))

@@ -172,32 +172,23 @@ def half_vector_level(wi, phi):
     return np.maximum(delta, 0.0)
 
 
-def half_vector_vgroove(wi, phi, iterations: int = 60):
+def half_vector_vgroove(wi, phi):
     """Polar angles ``(t_i, t_o)`` of the half vector, for each azimuth ``phi``, where the
     V-groove shadowing ``G = min(1, 2 (n.h)(n.wo) / (wo.h), 2 (n.h)(n.wi) / (wi.h))``
     (Cook & Torrance 1982) has its kinks: where the ``wi`` term reaches 1 (``t_i``) and where
     the ``wo`` term does (``t_o``); ``inf`` where a curve misses the azimuth's range
     ``[0, tmax]`` (:func:`half_vector_tmax`).
 
-    With ``wi.h = R cos(t - delta)`` (``R``, ``delta`` of :func:`half_vector_tmax`):
-    the ``wi`` term is 1 where ``ci cos t = sin(theta_i) cos(psi) sin t``, ``t_i = pi/2 - delta``,
-    inside the range only for ``delta > pi/6``; the ``wo`` term (``n.wo = 2 (wi.h) cos t - ci``)
-    where ``(wi.h)(4 cos^2 t - 1) = 2 ci cos t``, which is ``ci > 0`` at ``t = 0`` and ``-(wi.h) < 0``
-    at the horizon: found by ``iterations`` bisections (to ``2^-60`` of the range)."""
+    With ``a = sin(theta_i) cos(psi)`` and ``wi.h = a sin t + ci cos t`` (``delta = atan2(a, ci)``
+    of :func:`half_vector_tmax`): the ``wi`` term is 1 where ``ci cos t = a sin t``,
+    ``t_i = pi/2 - delta``, inside the range only for ``delta > pi/6``.  The ``wo`` term
+    (``n.wo = 2 (wi.h) cos t - ci``) is 1 where ``(wi.h)(4 cos^2 t - 1) = 2 ci cos t``; divided by
+    ``cos^3 t`` this is the cubic ``a (u^3 - 3 u) = ci (1 - 3 u^2)`` in ``u = tan t``, i.e.
+    ``tan 3t = -ci / a = tan(delta + pi/2)``: ``t_o = (delta + pi/2) / 3``, the one root in
+    ``(0, tmax)`` at every azimuth (``delta > -pi/2``)."""
     ti, pi_ = _angles(wi)
-    ci, si = math.cos(ti), math.sin(ti)
-    c_psi = np.cos(np.asarray(phi, dtype=np.float64) - pi_)
-    delta = np.arctan2(si * c_psi, ci)
-    r = np.hypot(si * c_psi, ci)
-    tmax = 0.25 * math.pi + 0.5 * delta
-    t_i = np.where(delta > math.pi / 6, 0.5 * math.pi - delta, np.inf)
-    lo, hi = np.zeros_like(tmax), tmax.copy()
-    for _ in range(iterations):
-        mid = 0.5 * (lo + hi)
-        c = np.cos(mid)
-        above_ = r * np.cos(mid - delta) * (4.0 * c * c - 1.0) - 2.0 * ci * c > 0.0
-        lo, hi = np.where(above_, mid, lo), np.where(above_, hi, mid)
-    return t_i, 0.5 * (lo + hi)
+    delta = np.arctan2(math.sin(ti) * np.cos(np.asarray(phi, dtype=np.float64) - pi_), math.cos(ti))
+    return np.where(delta > math.pi / 6, 0.5 * math.pi - delta, np.inf), (delta + 0.5 * math.pi) / 3.0
 
 
 def half_vector_rule(wi, peaks=(), m: int = 3, levels: int = 4, pole_levels: int = 10):

@@ -1,6 +1,7 @@
-"""The one variant setter of plausible (its own module, which imports nothing of plausible's:
-the adapter of Mitsuba BSDFs, :mod:`plausible.analysis.mitsuba_bsdf`, imports it without
-importing the plugins, which import the adapter).
+"""The one variant setter of plausible (its own module, which imports nothing of plausible's but
+the array floor's device probe, :func:`plausible.arrays.backend.device_available`: the adapter of
+Mitsuba BSDFs, :mod:`plausible.analysis.mitsuba_bsdf`, imports it without importing the plugins,
+which import the adapter).
 
 Which device renders: Mitsuba's ``cuda_ad_*`` variants run on an NVIDIA GPU, ``llvm_ad_*`` on
 the CPU's cores, ``scalar_*`` one ray at a time.  :func:`preferred` picks the variant of a kind
@@ -16,6 +17,8 @@ from __future__ import annotations
 
 import os
 
+from ..arrays import backend as _backend
+
 #: The variants :func:`ensure_variant` tries, in order, after :func:`preferred` (``rgb``),
 #: when none is set.
 VARIANTS = ("llvm_ad_rgb", "scalar_rgb")
@@ -29,22 +32,10 @@ def _name(family: str, kind: str) -> str:
     return f"scalar_{kind}" if family == "scalar" else f"{family}_ad_{kind}"
 
 
-def device_runs(family: str) -> bool:
-    """Dr.Jit's backend of ``family`` runs here (``cuda``: an NVIDIA GPU and driver; ``llvm``:
-    libLLVM); ``scalar`` always runs."""
-    if family == "scalar":
-        return True
-    try:
-        import drjit as dr
-
-        return bool(dr.has_backend(getattr(dr.JitBackend, family.upper())))
-    except Exception:  # noqa: BLE001 - no Dr.Jit, or it failed to start: the device does not run
-        return False
-
-
 def available() -> tuple:
     """The Mitsuba variants that can render on this machine: compiled into this Mitsuba and on
-    a device that runs here (``cuda_ad_*`` only with a GPU), preferred device first."""
+    a device that runs here (:func:`plausible.arrays.backend.device_available`: ``cuda_ad_*`` only
+    with a GPU; ``scalar_*`` always), preferred device first."""
     try:
         import mitsuba as mi
     except ImportError:
@@ -53,7 +44,7 @@ def available() -> tuple:
     order = {f: i for i, f in enumerate(FAMILIES)}
     fam = [(v, v.split("_")[0]) for v in built]
     return tuple(v for v, f in sorted(fam, key=lambda t: (order.get(t[1], 9), t[0]))
-                 if f in order and device_runs(f))
+                 if f in order and (f == "scalar" or _backend.device_available(f)))
 
 
 def prefer(request: str | None):
@@ -123,5 +114,5 @@ def ensure_variant():
     raise RuntimeError("plausible.mitsuba: no Mitsuba variant could be set (" + "; ".join(reasons) + ")")
 
 
-__all__ = ["ENV", "FAMILIES", "VARIANTS", "available", "device_runs", "ensure_variant", "family", "prefer",
+__all__ = ["ENV", "FAMILIES", "VARIANTS", "available", "ensure_variant", "family", "prefer",
            "preferred"]

@@ -125,7 +125,7 @@ class CookTorrance(BxDF):
 
     def kink_curves(self, wi, phi):
         """The V-groove's two kinks (:func:`~plausible.integrals.quadrature.half_vector_vgroove`),
-        each left out where the distribution there is below ``exp(-60)`` of its peak (the
+        each left out where the distribution there is below ``exp(-36)`` of its peak (the
         exponent ``tan^2 t / m^2``, Blinn's ``-n log cos t``): a kink in a lobe's far tail
         moves no digit of the albedo and would only cost nodes."""
         if self.params["geometry"] != "vgroove":
@@ -140,7 +140,7 @@ class CookTorrance(BxDF):
                     tail = -blinn_exponent(m) * np.log(np.cos(t))
                 else:
                     tail = np.tan(t) ** 2 / (m * m)
-            out.append(np.where(np.isfinite(t) & (tail < 60.0), t, np.inf))
+            out.append(np.where(np.isfinite(t) & (tail < 36.0), t, np.inf))
         return out
 
     def kink_azimuths(self, wi):
