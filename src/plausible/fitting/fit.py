@@ -366,19 +366,25 @@ class BoundWarning(UserWarning):
 
 def candidate(proto: BxDF, values: dict) -> BxDF:
     """A model of ``proto``'s class at ``values`` without building it again: a copy of
-    ``proto`` with its parameter namespaces replaced (the parameters as data of one
-    model built once per fit; the issue measured 3,851 ``Param.validate`` calls in
-    one fit).  The values come from the optimiser's variables, which
-    :meth:`_Var.inv` keeps inside each parameter's range, so only the model's own
-    constraints between parameters (``_validate``: Modified Phong's ``kd + ks <= 1``)
-    are checked (ValueError as from the class).  A model that builds state of its own
-    in ``__init__`` or derives a parameter (Neumann's ``c``) is built by its class."""
+    ``proto`` with its parameter namespaces replaced (the parameters as data of the one
+    model built per fit; the issue measured 3,851 ``Param.validate`` calls in one fit).
+    The values come from the optimiser's variables, which :meth:`_Var.inv` keeps inside
+    each parameter's range, or from ``proto`` itself, so only the model's own constraints
+    between parameters (``_validate``: Modified Phong's ``kd + ks <= 1``) are checked
+    (ValueError as from the class).  A model that builds state of its own in ``__init__``
+    (a sum, Kulla-Conty's tables) or derives a parameter (Neumann's ``c``) is built by its
+    class.  A ``_kernel_view`` of its own is no reason to build: it runs on the copy and
+    reads the copy's parameters (glTF's ``specular_color_max``; tests/fitting/test_fit.py
+    compares every registered model's copy with a built one)."""
     cls = type(proto)
-    if cls.DERIVED or cls.__init__ is not BxDF.__init__ or cls._kernel_view is not BxDF._kernel_view:
+    if cls.DERIVED or cls.__init__ is not BxDF.__init__:
         return cls(**values)
     m = copy.copy(proto)
     vals = dict(proto.params)
     vals.update(values)
+    # the channel count as __init__ counts it (a channel's fit holds scalar colours)
+    sizes = {np.size(vals[p.name]) for p in cls.PARAMS if p.is_color and np.ndim(vals[p.name]) == 1}
+    m.channels = sizes.pop() if len(sizes) == 1 else None
     m._params = Params(vals)
     m.p = SimpleNamespace(**vals)
     m.q = SimpleNamespace(**{k: (float(np.mean(v)) if isinstance(v, np.ndarray) else v) for k, v in vals.items()})
@@ -517,6 +523,8 @@ class _Problem:
     rows: np.ndarray | None = None
     #: the weight of the highlight hold (:func:`fit`'s ``highlight``)
     highlight: float = M.HIGHLIGHT_WEIGHT
+    #: the model built (and validated) once per fit; every candidate is a copy with new values (:func:`candidate`)
+    proto: BxDF | None = None
 
     @classmethod
     def make(cls, info, proto, tgt, metric, combine, maxiter, deadline, highlight=M.HIGHLIGHT_WEIGHT):
@@ -524,7 +532,7 @@ class _Problem:
         fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
         wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
         return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast),
-                   M.highlight_rows(wi, tgt.fcos), float(highlight))
+                   M.highlight_rows(wi, tgt.fcos), float(highlight), proto)
 
 
 def _channel(g, c):
@@ -556,8 +564,6 @@ class _Objective:
         #: ``(step, upper bounds)`` while L-BFGS-B runs (see :meth:`many`), else None
         self.fd = None
         self._cache = {}
-        #: the model built (and validated) once; every candidate is a copy with new values
-        self._proto = None
         #: candidates the model rejected (its ``_validate``)
         self.rejected = 0
 
@@ -566,10 +572,7 @@ class _Objective:
         for v, xi in zip(self.vars, x):
             ps[v.name] = v.inv(xi)
             ps.update(dict.fromkeys(v.tied, ps[v.name]))
-        if self._proto is None:
-            self._proto = self.problem.info.cls(**ps)
-            return self._proto
-        return candidate(self._proto, ps)
+        return candidate(self.problem.proto, ps)
 
     def __call__(self, x, beta=None):
         return self.many([x], beta)[0]
@@ -824,7 +827,7 @@ def _fit_shared(problem, vars_, base, starts, seed, tick):
     rng = np.random.default_rng(seed)
     x_def = [v.fwd(params[v.name]) for v in vars_]
     x0s = [x_def] + [[rng.uniform(*v.bounds) for v in vars_] for _ in range(starts - 1)]
-    x0s = [_feasible(problem.info, params, vars_, x, rng) for x in x0s]
+    x0s = [_feasible(problem.proto, params, vars_, x, rng) for x in x0s]
     obj = _Objective(problem, vars_, params, None)
     params.update(optimise(obj, x0s, tick))
     return params, [obj]
@@ -863,12 +866,14 @@ def _reduce_alb(a, c):
     return a
 
 
-def _feasible(info, params, vars_, x, rng, tries=50):
+def _feasible(proto, params, vars_, x, rng, tries=50):
+    """``x``, or a seeded uniform point in the variables where the model rejects ``x``
+    (its constraints between parameters, :func:`candidate`); ``x`` after ``tries``."""
     for _ in range(tries):
         ps = dict(params)
         ps.update({v.name: v.inv(xi) for v, xi in zip(vars_, x)})
         try:
-            info.cls(**ps)
+            candidate(proto, ps)
             return list(x)
         except ValueError:
             x = [rng.uniform(*v.bounds) for v in vars_]
@@ -888,7 +893,7 @@ def _free_params(info, proto, fixed, tgt):
             ps = dict(proto.params)
             ps[p.name] = v.inv(v.bounds[0] + frac * (v.bounds[1] - v.bounds[0]))
             try:
-                alt = info.cls(**ps).eval(tgt.wi, tgt.wo)
+                alt = candidate(proto, ps).eval(tgt.wi, tgt.wo)
             except ValueError:
                 continue
             if not np.allclose(alt, ref, rtol=1e-12, atol=0):
