@@ -275,7 +275,7 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
                       UnconstrainedWarning, stacklevel=3)
     # 6. every metric's figure, albedo by the accurate integrator; parameters at their bounds said aloud
     model = info.cls(**params)
-    out = evaluate_fit(model, tgt, problem.eps, combine)
+    out = evaluate_fit(model, tgt, problem.eps, combine, problem.rows)
     bounds = at_bounds(vars_, params)
     if bounds:
         warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(bounds)
@@ -836,21 +836,98 @@ def _fit_shared(problem, vars_, base, starts, seed, tick):
 def _fit_channels(problem, cvars, params, base, tick):
     """Step 4: the colour parameters ``cvars`` refitted on each channel, from the
     shared fit, with the other parameters fixed (fixed colours at this channel's
-    value).  Returns the parameters with colours and the objectives used."""
+    value): in closed form where that is exact (:func:`_linear_colours`), else by
+    :func:`optimise` from the shared fit.  Returns the parameters with colours and the
+    objectives used."""
     C = problem.tgt.channels
     per = {v.name: [] for v in cvars}
     objectives = []
+    x_shared = [v.fwd(params[v.name]) for v in cvars]
+    basis = {}
     for c in range(C):
         pc = dict(params)
         pc.update({k: float(np.asarray(v)[c]) for k, v in base.items()
                    if isinstance(v, np.ndarray) and v.size == C})
         obj = _Objective(problem, cvars, pc, c)
         objectives.append(obj)
-        for k, val in optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
+        x = _linear_colours(obj, x_shared, basis)
+        if x is not None:
+            tick()
+            found = obj.best_params(x)
+        else:
+            found = optimise(obj, [x_shared], tick)
+        for k, val in found.items():
             per[k].append(val)
     params = dict(params)
     params.update({k: np.array(vals) for k, vals in per.items() if len(vals) == C})
     return params, objectives
+
+
+#: A model is linear in its colour variables (:func:`_linear_colours`) where ``f cos`` at a
+#: check point differs from the linear prediction by at most this fraction of its largest value.
+LINEAR_TOL = 1e-10
+
+
+def _colour_basis(obj, x0):
+    """``(c0, B)`` with ``c(x) = c0 + B x`` (``f cos`` on the pairs, this objective's channel)
+    where the model is linear in the variables ``x`` of ``obj`` (every one untransformed), else
+    None: ``B``'s columns from one step per variable from ``x0`` (half-way to its farther
+    bound), checked at a third point that moves them all (0.6 of each step); every candidate a
+    model accepts, in one launch."""
+    if any(v.tf != "lin" for v in obj.vars):
+        return None
+    lo = np.array([v.bounds[0] for v in obj.vars])
+    hi = np.array([v.bounds[1] for v in obj.vars])
+    x0 = np.clip(np.asarray(x0, float), lo, hi)
+    d = np.where(x0 - lo >= hi - x0, 0.5 * (lo - x0), 0.5 * (hi - x0))
+    if np.any(d == 0.0):
+        return None
+    pts = [x0] + [x0 + dk * e for dk, e in zip(d, np.eye(len(x0)))] + [x0 + 0.6 * d]
+    models, vals = obj._candidates(pts)
+    obj.evaluations += len(pts)
+    if any(m is None for m in models):
+        return None
+    cs = [_reduce(v[0], obj.problem.tgt.wo, obj.c).reshape(-1) for v in vals]
+    B = np.column_stack([(ck - cs[0]) / dk for ck, dk in zip(cs[1:-1], d)])
+    c0 = cs[0] - B @ x0
+    scale = max(float(np.max(np.abs(np.concatenate(cs)))), 1e-300)
+    if np.max(np.abs(c0 + B @ pts[-1] - cs[-1])) > LINEAR_TOL * scale:
+        return None
+    return c0, B
+
+
+def _linear_colours(obj, x_shared, basis):
+    """The colour step of ``l2-cos`` in closed form, where exact: the model linear in its colour
+    variables (:func:`_colour_basis`: Ward's ``rd``, ``rs``; the basis computed once for every
+    channel that shares the other parameters, kept in ``basis``), so the figure is a linear least
+    squares within the variables' bounds, solved by SciPy's BVLS (an active-set method: the
+    exact optimum).  Kept only where the model accepts the solution and its highlight lies inside
+    the band (:func:`plausible.fitting.metrics.highlight_excess` zero: the highlight term, never
+    negative, adds nothing, so the optimum of the sum); then ``obj`` holds it as its best point.
+    Returns the variables, or None (the iterative fit decides)."""
+    pb = obj.problem
+    if pb.metric != "l2-cos" or not obj.vars:
+        return None
+    from scipy.optimize import lsq_linear
+
+    names = {v.name for v in obj.vars}
+    key = tuple(sorted((k, repr(v)) for k, v in obj.params0.items() if k not in names))
+    if key not in basis:
+        basis[key] = _colour_basis(obj, x_shared)
+    if basis[key] is None:
+        return None
+    c0, B = basis[key]
+    g = np.asarray(obj.g, float).reshape(-1)
+    den = math.sqrt(float(np.sum(g * g)))
+    if den == 0.0:
+        return None
+    lo, hi = [np.array([v.bounds[k] for v in obj.vars]) for k in (0, 1)]
+    x = np.clip(lsq_linear(B / den, (g - c0) / den, bounds=(lo, hi), method="bvls").x, lo, hi)
+    if np.any(M.highlight_excess(c0 + B @ x, g, pb.rows, pb.eps) != 0.0):
+        return None
+    rejected = obj.rejected
+    obj.residuals_many([x])              # the model at the solution: accepted, and kept as the best point
+    return x if obj.rejected == rejected else None
 
 
 def _reduce(f, wo, c):
@@ -904,7 +981,7 @@ def _free_params(info, proto, fixed, tgt):
     return out
 
 
-def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
+def evaluate_fit(model, target, eps=None, combine: str = "sum", rows=None) -> dict:
     """Every metric's figure of ``model`` against ``target`` (albedo by the
     accurate integrator :func:`plausible.analysis.albedo_curve`).
 
@@ -922,9 +999,12 @@ def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
         the model's directional albedo at the target's ``thetas`` (an array,
         channel-averaged to the target's shape), or None without a target albedo.
 
+    ``rows``: the target's highlight (:func:`plausible.fitting.metrics.highlight_rows`), if known.
+
     Example: ``evaluate_fit(fit.model, "material:nickel@ngan2005/ward")["errors"]["log"]``."""
     tgt = as_target(target)
-    rows = M.highlight_rows(np.broadcast_to(tgt.wi, np.shape(tgt.wo)), tgt.fcos)
+    if rows is None:
+        rows = M.highlight_rows(np.broadcast_to(tgt.wi, np.shape(tgt.wo)), tgt.fcos)
     f = _fcos(model.eval(tgt.wi, tgt.wo), tgt.wo)
     g = tgt.fcos
     if f.ndim < g.ndim:
