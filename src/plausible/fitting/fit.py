@@ -249,7 +249,7 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
     # 1. free parameters; a parameter whose default is None resolves from the
     # others (neumann-metal's c): leave it out so that it follows them
     base = {k: v for k, v in proto.params.items() if k in fixed or info.param(k).default is not None}
-    free = _free_params(info, proto, fixed, tgt)
+    free = _free_params(info, proto, fixed, problem.values)
     vars_ = [_Var(p) for p in free]
     colour_vars = [v for v in vars_ if v.is_color] if tgt.channels else []
     pairs = _anisotropic_pairs(free) if is_isotropic(tgt) else []
@@ -421,29 +421,23 @@ def unconstrained(problem, vars_, params) -> list:
     obj = _Objective(problem, vars_, params, None)
     x0 = np.array([v.fwd(params[v.name]) for v in vars_])
 
-    def out(x):
-        try:
-            m = obj.model_at(x)
-        except ValueError:
-            return None
-        return np.log(_reduce(m.eval(tgt.wi, tgt.wo), tgt.wo, None) + problem.eps)
-
-    f0 = out(x0)
+    pts = [x0]
+    for j, v in enumerate(vars_):
+        h = JAC_STEP * (v.bounds[1] - v.bounds[0])
+        xp, xm = x0.copy(), x0.copy()
+        xp[j] = min(x0[j] + h, v.bounds[1])
+        xm[j] = max(x0[j] - h, v.bounds[0])
+        pts += [xp, xm]
+    models, vals = obj._candidates(pts)          # every point in one launch
+    outs = [None if m is None else np.log(_reduce(next(vals)[0], tgt.wo, None) + problem.eps) for m in models]
+    f0 = outs[0]
     if f0 is None:
         return []
     cols = []
     for j, v in enumerate(vars_):
-        span = v.bounds[1] - v.bounds[0]
-        h = JAC_STEP * span
-        xp, xm = x0.copy(), x0.copy()
-        xp[j] = min(x0[j] + h, v.bounds[1])
-        xm[j] = max(x0[j] - h, v.bounds[0])
-        fp, fm = out(xp), out(xm)
-        if fp is None:
-            fp, xp = f0, x0
-        if fm is None:
-            fm, xm = f0, x0
-        dx = (xp[j] - xm[j]) / span
+        (xp, fp), (xm, fm) = [(x0, f0) if f is None else (x, f) for x, f in zip(pts[1 + 2 * j:3 + 2 * j],
+                                                                                 outs[1 + 2 * j:3 + 2 * j])]
+        dx = (xp[j] - xm[j]) / (v.bounds[1] - v.bounds[0])
         cols.append((fp - fm) / dx if dx > 0 else np.zeros_like(f0))
     J = np.column_stack(cols)
     norms = np.linalg.norm(J, axis=0)
@@ -957,28 +951,29 @@ def _feasible(proto, params, vars_, x, rng, tries=50):
     return list(x)
 
 
-def _free_params(info, proto, fixed, tgt):
-    """Numeric parameters not fixed by the caller that change f on the sample set."""
-    ref = proto.eval(tgt.wi, tgt.wo)
-    out = []
+def _free_params(info, proto, fixed, values):
+    """Numeric parameters not fixed by the caller that change f on the sample set: each moved
+    to 0.37 and 0.73 of its variable's range, every such model evaluated in one launch
+    (``values``, the fit's :class:`_Values`)."""
+    probes, models = [], [proto]
     for p in info.params:
         if p.name in fixed or not p.numeric or p.integer or p.default is None:
             continue
         v = _Var(p)
-        changed = False
         for frac in (0.37, 0.73):
             ps = dict(proto.params)
             ps[p.name] = v.inv(v.bounds[0] + frac * (v.bounds[1] - v.bounds[0]))
             try:
-                alt = candidate(proto, ps).eval(tgt.wi, tgt.wo)
+                models.append(candidate(proto, ps))
+                probes.append(p)
             except ValueError:
                 continue
-            if not np.allclose(alt, ref, rtol=1e-12, atol=0):
-                changed = True
-                break
-        if changed:
+    ref, *alts = [f for f, _ in values.many(models)]
+    out = []
+    for p, alt in zip(probes, alts):
+        if p not in out and not np.allclose(alt, ref, rtol=1e-12, atol=0):
             out.append(p)
-    return out
+    return [p for p in info.params if p in out]
 
 
 def evaluate_fit(model, target, eps=None, combine: str = "sum", rows=None) -> dict:
