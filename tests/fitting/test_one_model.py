@@ -182,3 +182,23 @@ def test_the_linearity_check_refuses_a_model_not_linear_in_its_colours():
     tgt = obj.problem.tgt
     want = built.eval(tgt.wi, tgt.wo) * tgt.wo[:, 2]
     np.testing.assert_allclose(c0 + B @ x, want, rtol=1e-10, atol=1e-14 * float(np.max(want)))
+
+
+def test_the_fit_runs_on_one_blas_thread(monkeypatch):
+    """Inside ``fit`` every BLAS library reports one thread (the objective sees it), and the
+    caller's setting is back afterwards."""
+    from threadpoolctl import threadpool_info
+
+    F = importlib.import_module("plausible.fitting.fit")
+    seen = []
+    real = F._Objective.residuals_many
+
+    def spy(self, xs):
+        seen.append({i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"})
+        return real(self, xs)
+
+    monkeypatch.setattr(F._Objective, "residuals_many", spy)
+    before = {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+    _fit_quiet("lambertian", as_target("lambertian:rd=0.3", thetas_deg=(0.0, 45.0)), "l2-cos", starts=1)
+    assert seen and all(s <= {1} for s in seen)
+    assert {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"} == before

@@ -219,11 +219,27 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     (``threadpoolctl``): two OpenBLAS threads for a problem of a few variables cost 12
     times the CPU of one (issue 40).
     """
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         return _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg,
                     target_albedo, maxiter, combine, highlight)
+
+
+_CONTROLLER = []
+
+
+def one_blas_thread():
+    """A context manager that holds every BLAS library at one thread (``threadpoolctl``): two
+    OpenBLAS threads for a problem of a few variables cost 12 times the CPU of one (issue 40).
+    The libraries are listed once per process (``ThreadpoolController``; listing them, as each
+    ``threadpool_limits`` call does, reads the process's loaded libraries: 2 ms, 3 % of a small
+    fit), after SciPy's optimisers are imported (their BLAS loaded)."""
+    from threadpoolctl import ThreadpoolController
+
+    if not _CONTROLLER:
+        import scipy.optimize  # noqa: F401  (SciPy's BLAS loaded before the libraries are listed)
+
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0].limit(limits=1, user_api="blas")
 
 
 def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg, target_albedo,
