@@ -19,7 +19,7 @@ specifications with their ranges); the albedo comes from
    ``l2-cos`` and ``log``: ``scipy.optimize.least_squares`` on the residual vector
    (:meth:`_Objective._residuals`; the Jacobian from one population of difference points),
    the multi-start ending at the first repeated or exact optimum (:data:`PERFECT`), each
-   candidate a copy of one model built per objective (:func:`candidate`).  An isotropic
+   candidate a copy of the one model built per fit (:func:`candidate`).  An isotropic
    target is fitted with each anisotropic pair tied first (:data:`ANISOTROPY_MARGIN`);
    every metric holds the target's highlight (:data:`plausible.fitting.metrics.HIGHLIGHT_BAND`).
    ``perceptual``: L-BFGS-B (SciPy, finite-difference gradients); a
@@ -35,7 +35,9 @@ specifications with their ranges); the albedo comes from
    of candidates in one launch (:meth:`_Objective.many`).
 4. **Colours**, for a multi-channel target: all parameters are first fitted to
    the channel mean with colours as scalars, then the colour parameters alone
-   are refitted per channel with the others fixed.
+   are refitted per channel with the others fixed: under ``l2-cos``, where the model
+   is linear in its colours, in closed form (:func:`_linear_colours`, BVLS), else by
+   :func:`optimise`.
 5. **Identifiability**: at the solution, the Jacobian of ``ln(f cos + eps)``
    on the sample pairs with respect to the free variables (central
    differences; columns scaled to unit length) is decomposed; a singular
