@@ -202,3 +202,25 @@ def test_the_fit_runs_on_one_blas_thread(monkeypatch):
     _fit_quiet("lambertian", as_target("lambertian:rd=0.3", thetas_deg=(0.0, 45.0)), "l2-cos", starts=1)
     assert seen and all(s <= {1} for s in seen)
     assert {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"} == before
+
+
+def test_what_a_fit_derives_from_its_target_follows_the_target():
+    """``Target.derived`` remembers the highlight rows for the next fit, and computes them again
+    once the target's values change in place (a remembered answer that did not follow would give
+    the old target's brightest pairs)."""
+    from plausible.fitting import metrics as M
+
+    tgt = as_target("ward:alpha_x=0.1:alpha_y=0.1:rs=0.2:rd=0.1", thetas_deg=(0.0, 30.0))
+    wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
+    calls = []
+
+    def rows(t):
+        calls.append(1)
+        return M.highlight_rows(wi, t.fcos)
+
+    first = tgt.derived("rows", rows)
+    assert np.array_equal(tgt.derived("rows", rows), first) and len(calls) == 1
+    k = int(np.argmin(tgt.fcos))
+    tgt.fcos[k] = 10 * float(np.max(tgt.fcos))        # a new brightest pair, in place
+    again = tgt.derived("rows", rows)
+    assert len(calls) == 2 and k in again.tolist() and np.array_equal(again, M.highlight_rows(wi, tgt.fcos))

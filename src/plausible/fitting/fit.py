@@ -270,7 +270,7 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
     free = _free_params(info, proto, fixed, problem.values)
     vars_ = [_Var(p) for p in free]
     colour_vars = [v for v in vars_ if v.is_color] if tgt.channels else []
-    pairs = _anisotropic_pairs(free) if is_isotropic(tgt) else []
+    pairs = _anisotropic_pairs(free) if tgt.derived("isotropic", is_isotropic) else []
     tick = start(progress, starts + bool(pairs) + (tgt.channels if colour_vars else 0), f"fit {model_name}")
     # 2-3. multi-start on the channel mean, colours as scalars (an isotropic target: the lobe isotropic first)
     notes = []
@@ -544,7 +544,7 @@ class _Problem:
         fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
         wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
         return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast),
-                   M.highlight_rows(wi, tgt.fcos), float(highlight), proto)
+                   tgt.derived("highlight_rows", lambda t: M.highlight_rows(wi, t.fcos)), float(highlight), proto)
 
 
 def _channel(g, c):
