@@ -224,3 +224,19 @@ def test_what_a_fit_derives_from_its_target_follows_the_target():
     tgt.fcos[k] = 10 * float(np.max(tgt.fcos))        # a new brightest pair, in place
     again = tgt.derived("rows", rows)
     assert len(calls) == 2 and k in again.tolist() and np.array_equal(again, M.highlight_rows(wi, tgt.fcos))
+
+
+def test_the_reported_albedo_in_one_batch_equals_each_incidence_alone():
+    """The albedo a fit reports (``FitResult.fit_albedo``: the target's 7 incidences integrated
+    together, one launch per refinement step) equals ``plausible.albedo`` of the fitted model at
+    each incidence alone within the two integrations' own error bounds (``tol`` 1e-6 each)."""
+    from plausible.analysis import direction
+
+    tgt = as_target("material:nickel@ngan2005/ward")
+    r = _fit_quiet("ward", tgt, "l2-cos")
+    a = np.asarray(r.fit_albedo)
+    assert a.shape == np.shape(tgt.albedo) == (7, 3)
+    for j, t in enumerate(tgt.thetas):
+        one = plausible.albedo(r.model, direction(float(t)))
+        assert np.all(np.abs(a[j] - one.value) <= 2e-6), (t, a[j], one.value)
+    assert np.max(np.abs(np.log(a / tgt.albedo))) == pytest.approx(r.errors["albedo_max"], abs=1e-12)
