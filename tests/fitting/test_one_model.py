@@ -241,3 +241,21 @@ def test_the_reported_albedo_in_one_batch_equals_each_incidence_alone():
         one = plausible.albedo(r.model, direction(float(t)))
         assert np.all(np.abs(a[j] - one.value) <= 2e-6), (t, a[j], one.value)
     assert np.max(np.abs(np.log(a / tgt.albedo))) == pytest.approx(r.errors["albedo_max"], abs=1e-12)
+
+
+def test_a_deadline_during_the_colour_step_returns_the_shared_fit(monkeypatch):
+    """The time limit passing between the shared fit and the colours (the closed form's one
+    evaluation past it): the fit returns, ``timed_out``, with the shared fit's colours, and
+    raises nothing."""
+    F = importlib.import_module("plausible.fitting.fit")
+    real = F._fit_channels
+
+    def late(problem, *a):
+        problem.deadline = 0.0               # long past
+        return real(problem, *a)
+
+    monkeypatch.setattr(F, "_fit_channels", late)
+    tgt = as_target(_WARD, thetas_deg=(0.0, 45.0))
+    r = _fit_quiet("ward", tgt, "l2-cos", starts=1, time_limit=100.0)
+    assert r.timed_out
+    np.testing.assert_allclose(r.params["rd"], np.full(3, np.mean(r.params["rd"])), rtol=0)
