@@ -259,3 +259,14 @@ def test_a_deadline_during_the_colour_step_returns_the_shared_fit(monkeypatch):
     r = _fit_quiet("ward", tgt, "l2-cos", starts=1, time_limit=100.0)
     assert r.timed_out
     np.testing.assert_allclose(r.params["rd"], np.full(3, np.mean(r.params["rd"])), rtol=0)
+
+
+def test_without_the_highlight_hold_the_closed_form_is_the_plain_least_squares():
+    """``highlight=0``: Lambertian's colours for the nickel target are the plain linear least
+    squares of ``f cos`` (the per-channel normal equation ``rd = pi sum(g c1) / sum(c1^2)`` with
+    ``c1 = cos(theta_o) / pi``, clipped to [0, 1]), computed here independently."""
+    tgt = as_target("material:nickel@ngan2005/ward")
+    r = _fit_quiet("lambertian", tgt, "l2-cos", highlight=0.0)
+    c1 = np.clip(tgt.wo[:, 2], 0.0, None) / np.pi
+    want = np.clip(c1 @ tgt.fcos / (c1 @ c1), 0.0, 1.0)
+    np.testing.assert_allclose(r.params["rd"], want, rtol=1e-10)

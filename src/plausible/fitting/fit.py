@@ -918,7 +918,8 @@ def _linear_colours(obj, x_shared, basis):
     squares within the variables' bounds, solved by SciPy's BVLS (an active-set method: the
     exact optimum).  Kept only where the model accepts the solution and its highlight lies inside
     the band (:func:`plausible.fitting.metrics.highlight_excess` zero: the highlight term, never
-    negative, adds nothing, so the optimum of the sum); then ``obj`` holds it as its best point.
+    negative, adds nothing, so the optimum of the sum) or has no weight (``highlight=0``); then
+    ``obj`` holds it as its best point.
     Returns the variables, or None (the iterative fit decides)."""
     pb = obj.problem
     if pb.metric != "l2-cos" or not obj.vars:
@@ -938,7 +939,7 @@ def _linear_colours(obj, x_shared, basis):
         return None
     lo, hi = [np.array([v.bounds[k] for v in obj.vars]) for k in (0, 1)]
     x = np.clip(lsq_linear(B / den, (g - c0) / den, bounds=(lo, hi), method="bvls").x, lo, hi)
-    if np.any(M.highlight_excess(c0 + B @ x, g, pb.rows, pb.eps) != 0.0):
+    if pb.highlight > 0.0 and np.any(M.highlight_excess(c0 + B @ x, g, pb.rows, pb.eps) != 0.0):
         return None
     rejected = obj.rejected
     obj.residuals_many([x])              # the model at the solution: accepted, and kept as the best point
