@@ -6,11 +6,15 @@ registry's bounds, ``least_squares(method="trf")`` with SciPy's own 2-point Jaco
 defaults, the residuals of :meth:`plausible.fitting.fit._Objective._residuals` written out here
 (``(c - g) / |g|`` and the highlight rows), every evaluation ``plausible.make(...)`` then
 ``eval`` on NumPy.  ``plausible.fit``: its whole procedure (starts, the isotropic fit first, the
-colours per channel, identifiability, the accurate albedo of the result), then with each
-Jacobian rule (:data:`plausible.fitting.fit.JACOBIAN`).  Both on one BLAS thread.  The target
+colours per channel, identifiability, the accurate albedo of the result).
+Both on one BLAS thread.  The target
 (pairs, values, accurate albedo) is built once, outside every timing.
 
-Run: ``PYTHONPATH=src python benchmarks/fitter.py``; prints a Markdown table.  With
+Run: ``PYTHONPATH=src python benchmarks/fitter.py [--repeats N] [--before OLD/src]``; prints a
+Markdown table of median CPU seconds over ``N`` (default 7) interleaved runs of each; ``--before``
+adds ``plausible.fit`` of another checkout's ``src`` measured in a child process of the same run
+(the plain fit's column is this process's).  ``--perceptual``: the perceptual fits of
+:data:`PERCEPTUAL` instead (median of ``N``, default 7; ``--before`` as above).  With
 ``--convert``: the CPU and wall seconds of :func:`plausible.convert` of a few published fits to
 Mitsuba and glTF, after one warm-up conversion (Mitsuba imported before).
 """
@@ -61,13 +65,18 @@ def plain(name, tgt):
     return r.x, math.sqrt(2 * r.cost), time.process_time() - t0, count[0]
 
 
-def ours(name, tgt, jacobian):
+def ours(name, tgt, jacobian, metric="l2-cos"):
     F.JACOBIAN = jacobian
     t0 = time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = plausible.fit(name, tgt, "l2-cos")
+        r = plausible.fit(name, tgt, metric)
     return r, time.process_time() - t0
+
+
+#: The perceptual fits timed by ``--perceptual`` (no plain baseline: not a sum of squares).
+PERCEPTUAL = (("ward", "material:gold-metallic-paint@low2012/smooth-e2"),
+              ("ashikhmin-shirley", "material:gold-metallic-paint@low2012/smooth-e2"))
 
 
 CONVERSIONS = ("material:nickel@ngan2005/ward", "material:alum-bronze@ngan2005/ward",
@@ -89,23 +98,94 @@ def conversions():
                   f"{time.time() - t0:.1f} |", flush=True)
 
 
+def _median_cpu(fn, repeats):
+    """``(last result, median CPU seconds)`` of ``repeats`` calls of ``fn() -> (result, seconds)``."""
+    out = [fn() for _ in range(repeats)]
+    return out[-1][0], float(np.median([t for _, t in out]))
+
+
+def before(src, repeats, metric="l2-cos"):
+    """The median CPU seconds and evaluations of ``plausible.fit`` under ``metric`` per case,
+    measured by the code under ``src`` (another checkout's ``src``) in a child process, one BLAS
+    thread."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, PYTHONPATH=src)
+    out = subprocess.run([sys.executable, __file__, "--ours-only", str(repeats), metric], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def ours_only(repeats, metric="l2-cos"):
+    import json
+
+    res = {}
+    with threadpool_limits(limits=1, user_api="blas"):
+        for name, spec in (CASES if metric == "l2-cos" else PERCEPTUAL):
+            tgt = as_target(spec)
+            ours(name, tgt, "population", metric)
+            r, t = _median_cpu(lambda: ours(name, tgt, "population", metric), repeats)
+            res[name] = (t, r.evaluations, r.errors[metric])
+    print(json.dumps(res))
+
+
+def perceptual(repeats, src):
+    """``--perceptual``: the median CPU seconds of the perceptual fits, this checkout's and
+    (``--before``) another's."""
+    import json
+    import io
+    from contextlib import redirect_stdout
+
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        ours_only(repeats, "perceptual")
+    new = json.loads(buf.getvalue().strip().splitlines()[-1])
+    old = before(src, repeats, "perceptual") if src else None
+    print(f"median CPU s of {repeats} runs each\n| model | target | plausible.fit perceptual: CPU s (evaluations), "
+          "figure |" + (" before: CPU s (evaluations), figure |" if old else "") + "\n|---|---|---|" + ("---|" if old else ""))
+    for name, spec in PERCEPTUAL:
+        t, n, e = new[name]
+        row = f"| {name} | {spec} | {t:.2f} ({n}), {e:.6g} |"
+        if old:
+            t, n, e = old[name]
+            row += f" {t:.2f} ({n}), {e:.6g} |"
+        print(row)
+
+
 def main():
     import sys
 
-    if "--convert" in sys.argv[1:]:
+    args = sys.argv[1:]
+    if "--convert" in args:
         return conversions()
-    print("| model | target | plain least_squares: CPU s (evaluations), l2-cos | plausible.fit, population "
-          "Jacobian: CPU s (evaluations), l2-cos | ratio | plausible.fit, 2-point: CPU s, l2-cos |")
-    print("|---|---|---|---|---|---|")
+    if "--ours-only" in args:
+        k = args.index("--ours-only")
+        return ours_only(int(args[k + 1]), args[k + 2] if len(args) > k + 2 else "l2-cos")
+    repeats = int(args[args.index("--repeats") + 1]) if "--repeats" in args else 7
+    if "--perceptual" in args:
+        return perceptual(repeats, args[args.index("--before") + 1] if "--before" in args else None)
+    old = before(args[args.index("--before") + 1], repeats) if "--before" in args else None
+    print(f"median CPU s of {repeats} runs each")
+    print("| model | target | plain least_squares: CPU s (evaluations), l2-cos | plausible.fit: CPU s (evaluations), "
+          "l2-cos | ratio |" + (" before (--before): CPU s (evaluations), l2-cos | ratio |" if old else ""))
+    print("|---|---|---|---|---|" + ("---|---|" if old else ""))
     with threadpool_limits(limits=1, user_api="blas"):
         for name, spec in CASES:
             tgt = as_target(spec)
             ours(name, tgt, "population")          # warm: the kernel cache, imports
-            _, e0, t0, n0 = plain(name, tgt)
-            r1, t1 = ours(name, tgt, "population")
-            r2, t2 = ours(name, tgt, "2-point")
-            print(f"| {name} | {spec} | {t0:.2f} ({n0}), {e0:.5g} | {t1:.2f} ({r1.evaluations}), "
-                  f"{r1.errors['l2-cos']:.5g} | {t1 / t0:.2f} | {t2:.2f}, {r2.errors['l2-cos']:.5g} |", flush=True)
+            runs = [(plain(name, tgt), ours(name, tgt, "population")) for _ in range(repeats)]   # interleaved
+            (_, e0, _, n0), r1 = runs[-1][0], runs[-1][1][0]
+            t0 = float(np.median([p[2] for p, _ in runs]))
+            t1 = float(np.median([o[1] for _, o in runs]))
+            row = (f"| {name} | {spec} | {t0:.3f} ({n0}), {e0:.5g} | {t1:.3f} ({r1.evaluations}), "
+                   f"{r1.errors['l2-cos']:.5g} | {t1 / t0:.2f} |")
+            if old:
+                tb, nb, eb = old[name]
+                row += f" {tb:.3f} ({nb}), {eb:.5g} | {tb / t0:.2f} |"
+            print(row, flush=True)
 
 
 if __name__ == "__main__":

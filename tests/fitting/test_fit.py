@@ -237,7 +237,7 @@ def test_batched_objective_equals_one_candidate_numpy_objective(metric, model_na
     ref_pb = _problem(model_name, target, metric, "numpy")
     assert pb.values.kernel.backend == backend_name
     xs = _XS[model_name]
-    vars_ = [_Var(p) for p in _free_params(info, info.cls(), {}, pb.tgt)]
+    vars_ = [_Var(p) for p in _free_params(info, info.cls(), {}, pb.values)]
     assert len(vars_) == len(xs[0])
     params = dict(info.cls().params)
     for beta in (20.0, 2000.0, None):

@@ -19,7 +19,7 @@ specifications with their ranges); the albedo comes from
    ``l2-cos`` and ``log``: ``scipy.optimize.least_squares`` on the residual vector
    (:meth:`_Objective._residuals`; the Jacobian from one population of difference points),
    the multi-start ending at the first repeated or exact optimum (:data:`PERFECT`), each
-   candidate a copy of one model built per objective (:func:`candidate`).  An isotropic
+   candidate a copy of the one model built per fit (:func:`candidate`).  An isotropic
    target is fitted with each anisotropic pair tied first (:data:`ANISOTROPY_MARGIN`);
    every metric holds the target's highlight (:data:`plausible.fitting.metrics.HIGHLIGHT_BAND`).
    ``perceptual``: L-BFGS-B (SciPy, finite-difference gradients); a
@@ -35,7 +35,9 @@ specifications with their ranges); the albedo comes from
    of candidates in one launch (:meth:`_Objective.many`).
 4. **Colours**, for a multi-channel target: all parameters are first fitted to
    the channel mean with colours as scalars, then the colour parameters alone
-   are refitted per channel with the others fixed.
+   are refitted per channel with the others fixed: under ``l2-cos``, where the model
+   is linear in its colours, in closed form (:func:`_linear_colours`, BVLS), else by
+   :func:`optimise`.
 5. **Identifiability**: at the solution, the Jacobian of ``ln(f cos + eps)``
    on the sample pairs with respect to the free variables (central
    differences; columns scaled to unit length) is decomposed; a singular
@@ -219,11 +221,27 @@ def fit(model_name: str, target, metric: str = "perceptual", *, fixed: dict | No
     (``threadpoolctl``): two OpenBLAS threads for a problem of a few variables cost 12
     times the CPU of one (issue 40).
     """
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         return _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg,
                     target_albedo, maxiter, combine, highlight)
+
+
+_CONTROLLER = []
+
+
+def one_blas_thread():
+    """A context manager that holds every BLAS library at one thread (``threadpoolctl``): two
+    OpenBLAS threads for a problem of a few variables cost 12 times the CPU of one (issue 40).
+    The libraries are listed once per process (``ThreadpoolController``; listing them, as each
+    ``threadpool_limits`` call does, reads the process's loaded libraries: 2 ms, 3 % of a small
+    fit), after SciPy's optimisers are imported (their BLAS loaded)."""
+    from threadpoolctl import ThreadpoolController
+
+    if not _CONTROLLER:
+        import scipy.optimize  # noqa: F401  (SciPy's BLAS loaded before the libraries are listed)
+
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0].limit(limits=1, user_api="blas")
 
 
 def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, thetas_deg, target_albedo,
@@ -249,10 +267,10 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
     # 1. free parameters; a parameter whose default is None resolves from the
     # others (neumann-metal's c): leave it out so that it follows them
     base = {k: v for k, v in proto.params.items() if k in fixed or info.param(k).default is not None}
-    free = _free_params(info, proto, fixed, tgt)
+    free = _free_params(info, proto, fixed, problem.values)
     vars_ = [_Var(p) for p in free]
     colour_vars = [v for v in vars_ if v.is_color] if tgt.channels else []
-    pairs = _anisotropic_pairs(free) if is_isotropic(tgt) else []
+    pairs = _anisotropic_pairs(free) if tgt.derived("isotropic", is_isotropic) else []
     tick = start(progress, starts + bool(pairs) + (tgt.channels if colour_vars else 0), f"fit {model_name}")
     # 2-3. multi-start on the channel mean, colours as scalars (an isotropic target: the lobe isotropic first)
     notes = []
@@ -275,7 +293,7 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
                       UnconstrainedWarning, stacklevel=3)
     # 6. every metric's figure, albedo by the accurate integrator; parameters at their bounds said aloud
     model = info.cls(**params)
-    out = evaluate_fit(model, tgt, problem.eps, combine)
+    out = evaluate_fit(model, tgt, problem.eps, combine, problem.rows)
     bounds = at_bounds(vars_, params)
     if bounds:
         warnings.warn(f"fit of {model_name} to {tgt.label}: " + "; ".join(bounds)
@@ -366,19 +384,25 @@ class BoundWarning(UserWarning):
 
 def candidate(proto: BxDF, values: dict) -> BxDF:
     """A model of ``proto``'s class at ``values`` without building it again: a copy of
-    ``proto`` with its parameter namespaces replaced (the parameters as data of one
-    model built once per fit; the issue measured 3,851 ``Param.validate`` calls in
-    one fit).  The values come from the optimiser's variables, which
-    :meth:`_Var.inv` keeps inside each parameter's range, so only the model's own
-    constraints between parameters (``_validate``: Modified Phong's ``kd + ks <= 1``)
-    are checked (ValueError as from the class).  A model that builds state of its own
-    in ``__init__`` or derives a parameter (Neumann's ``c``) is built by its class."""
+    ``proto`` with its parameter namespaces replaced (the parameters as data of the one
+    model built per fit; the issue measured 3,851 ``Param.validate`` calls in one fit).
+    The values come from the optimiser's variables, which :meth:`_Var.inv` keeps inside
+    each parameter's range, or from ``proto`` itself, so only the model's own constraints
+    between parameters (``_validate``: Modified Phong's ``kd + ks <= 1``) are checked
+    (ValueError as from the class).  A model that builds state of its own in ``__init__``
+    (a sum, Kulla-Conty's tables) or derives a parameter (Neumann's ``c``) is built by its
+    class.  A ``_kernel_view`` of its own is no reason to build: it runs on the copy and
+    reads the copy's parameters (glTF's ``specular_color_max``; tests/fitting/test_fit.py
+    compares every registered model's copy with a built one)."""
     cls = type(proto)
-    if cls.DERIVED or cls.__init__ is not BxDF.__init__ or cls._kernel_view is not BxDF._kernel_view:
+    if cls.DERIVED or cls.__init__ is not BxDF.__init__:
         return cls(**values)
     m = copy.copy(proto)
     vals = dict(proto.params)
     vals.update(values)
+    # the channel count as __init__ counts it (a channel's fit holds scalar colours)
+    sizes = {np.size(vals[p.name]) for p in cls.PARAMS if p.is_color and np.ndim(vals[p.name]) == 1}
+    m.channels = sizes.pop() if len(sizes) == 1 else None
     m._params = Params(vals)
     m.p = SimpleNamespace(**vals)
     m.q = SimpleNamespace(**{k: (float(np.mean(v)) if isinstance(v, np.ndarray) else v) for k, v in vals.items()})
@@ -415,29 +439,23 @@ def unconstrained(problem, vars_, params) -> list:
     obj = _Objective(problem, vars_, params, None)
     x0 = np.array([v.fwd(params[v.name]) for v in vars_])
 
-    def out(x):
-        try:
-            m = obj.model_at(x)
-        except ValueError:
-            return None
-        return np.log(_reduce(m.eval(tgt.wi, tgt.wo), tgt.wo, None) + problem.eps)
-
-    f0 = out(x0)
+    pts = [x0]
+    for j, v in enumerate(vars_):
+        h = JAC_STEP * (v.bounds[1] - v.bounds[0])
+        xp, xm = x0.copy(), x0.copy()
+        xp[j] = min(x0[j] + h, v.bounds[1])
+        xm[j] = max(x0[j] - h, v.bounds[0])
+        pts += [xp, xm]
+    models, vals = obj._candidates(pts)          # every point in one launch
+    outs = [None if m is None else np.log(_reduce(next(vals)[0], tgt.wo, None) + problem.eps) for m in models]
+    f0 = outs[0]
     if f0 is None:
         return []
     cols = []
     for j, v in enumerate(vars_):
-        span = v.bounds[1] - v.bounds[0]
-        h = JAC_STEP * span
-        xp, xm = x0.copy(), x0.copy()
-        xp[j] = min(x0[j] + h, v.bounds[1])
-        xm[j] = max(x0[j] - h, v.bounds[0])
-        fp, fm = out(xp), out(xm)
-        if fp is None:
-            fp, xp = f0, x0
-        if fm is None:
-            fm, xm = f0, x0
-        dx = (xp[j] - xm[j]) / span
+        (xp, fp), (xm, fm) = [(x0, f0) if f is None else (x, f) for x, f in zip(pts[1 + 2 * j:3 + 2 * j],
+                                                                                 outs[1 + 2 * j:3 + 2 * j])]
+        dx = (xp[j] - xm[j]) / (v.bounds[1] - v.bounds[0])
         cols.append((fp - fm) / dx if dx > 0 else np.zeros_like(f0))
     J = np.column_stack(cols)
     norms = np.linalg.norm(J, axis=0)
@@ -517,6 +535,8 @@ class _Problem:
     rows: np.ndarray | None = None
     #: the weight of the highlight hold (:func:`fit`'s ``highlight``)
     highlight: float = M.HIGHLIGHT_WEIGHT
+    #: the model built (and validated) once per fit; every candidate is a copy with new values (:func:`candidate`)
+    proto: BxDF | None = None
 
     @classmethod
     def make(cls, info, proto, tgt, metric, combine, maxiter, deadline, highlight=M.HIGHLIGHT_WEIGHT):
@@ -524,7 +544,7 @@ class _Problem:
         fast = _FastAlbedo(tgt.thetas, [proto.peak_directions] + list(tgt.peaks)) if use_albedo else None
         wi = np.broadcast_to(tgt.wi, np.shape(tgt.wo))
         return cls(info, tgt, metric, combine, M.floor(tgt.fcos), fast, maxiter, deadline, _Values(tgt, fast),
-                   M.highlight_rows(wi, tgt.fcos), float(highlight))
+                   tgt.derived("highlight_rows", lambda t: M.highlight_rows(wi, t.fcos)), float(highlight), proto)
 
 
 def _channel(g, c):
@@ -556,8 +576,6 @@ class _Objective:
         #: ``(step, upper bounds)`` while L-BFGS-B runs (see :meth:`many`), else None
         self.fd = None
         self._cache = {}
-        #: the model built (and validated) once; every candidate is a copy with new values
-        self._proto = None
         #: candidates the model rejected (its ``_validate``)
         self.rejected = 0
 
@@ -566,10 +584,7 @@ class _Objective:
         for v, xi in zip(self.vars, x):
             ps[v.name] = v.inv(xi)
             ps.update(dict.fromkeys(v.tied, ps[v.name]))
-        if self._proto is None:
-            self._proto = self.problem.info.cls(**ps)
-            return self._proto
-        return candidate(self._proto, ps)
+        return candidate(self.problem.proto, ps)
 
     def __call__(self, x, beta=None):
         return self.many([x], beta)[0]
@@ -824,7 +839,7 @@ def _fit_shared(problem, vars_, base, starts, seed, tick):
     rng = np.random.default_rng(seed)
     x_def = [v.fwd(params[v.name]) for v in vars_]
     x0s = [x_def] + [[rng.uniform(*v.bounds) for v in vars_] for _ in range(starts - 1)]
-    x0s = [_feasible(problem.info, params, vars_, x, rng) for x in x0s]
+    x0s = [_feasible(problem.proto, params, vars_, x, rng) for x in x0s]
     obj = _Objective(problem, vars_, params, None)
     params.update(optimise(obj, x0s, tick))
     return params, [obj]
@@ -833,21 +848,102 @@ def _fit_shared(problem, vars_, base, starts, seed, tick):
 def _fit_channels(problem, cvars, params, base, tick):
     """Step 4: the colour parameters ``cvars`` refitted on each channel, from the
     shared fit, with the other parameters fixed (fixed colours at this channel's
-    value).  Returns the parameters with colours and the objectives used."""
+    value): in closed form where that is exact (:func:`_linear_colours`), else by
+    :func:`optimise` from the shared fit.  Returns the parameters with colours and the
+    objectives used."""
     C = problem.tgt.channels
     per = {v.name: [] for v in cvars}
     objectives = []
+    x_shared = [v.fwd(params[v.name]) for v in cvars]
+    basis = {}
     for c in range(C):
         pc = dict(params)
         pc.update({k: float(np.asarray(v)[c]) for k, v in base.items()
                    if isinstance(v, np.ndarray) and v.size == C})
         obj = _Objective(problem, cvars, pc, c)
         objectives.append(obj)
-        for k, val in optimise(obj, [[v.fwd(params[v.name]) for v in cvars]], tick).items():
+        try:
+            x = _linear_colours(obj, x_shared, basis)
+        except _Timeout:
+            x = None            # past the deadline: optimise() returns at once with the start
+        if x is not None:
+            tick()
+            found = obj.best_params(x)
+        else:
+            found = optimise(obj, [x_shared], tick)
+        for k, val in found.items():
             per[k].append(val)
     params = dict(params)
     params.update({k: np.array(vals) for k, vals in per.items() if len(vals) == C})
     return params, objectives
+
+
+#: A model is linear in its colour variables (:func:`_linear_colours`) where ``f cos`` at a
+#: check point differs from the linear prediction by at most this fraction of its largest value.
+LINEAR_TOL = 1e-10
+
+
+def _colour_basis(obj, x0):
+    """``(c0, B)`` with ``c(x) = c0 + B x`` (``f cos`` on the pairs, this objective's channel)
+    where the model is linear in the variables ``x`` of ``obj`` (every one untransformed), else
+    None: ``B``'s columns from one step per variable from ``x0`` (half-way to its farther
+    bound), checked at a third point that moves them all (0.6 of each step); every candidate a
+    model accepts, in one launch."""
+    if any(v.tf != "lin" for v in obj.vars):
+        return None
+    lo = np.array([v.bounds[0] for v in obj.vars])
+    hi = np.array([v.bounds[1] for v in obj.vars])
+    x0 = np.clip(np.asarray(x0, float), lo, hi)
+    d = np.where(x0 - lo >= hi - x0, 0.5 * (lo - x0), 0.5 * (hi - x0))
+    if np.any(d == 0.0):
+        return None
+    pts = [x0] + [x0 + dk * e for dk, e in zip(d, np.eye(len(x0)))] + [x0 + 0.6 * d]
+    models, vals = obj._candidates(pts)
+    obj.evaluations += len(pts)
+    if any(m is None for m in models):
+        return None
+    cs = [_reduce(v[0], obj.problem.tgt.wo, obj.c).reshape(-1) for v in vals]
+    B = np.column_stack([(ck - cs[0]) / dk for ck, dk in zip(cs[1:-1], d)])
+    c0 = cs[0] - B @ x0
+    scale = max(float(np.max(np.abs(np.concatenate(cs)))), 1e-300)
+    if np.max(np.abs(c0 + B @ pts[-1] - cs[-1])) > LINEAR_TOL * scale:
+        return None
+    return c0, B
+
+
+def _linear_colours(obj, x_shared, basis):
+    """The colour step of ``l2-cos`` in closed form, where exact: the model linear in its colour
+    variables (:func:`_colour_basis`: Ward's ``rd``, ``rs``; the basis computed once for every
+    channel that shares the other parameters, kept in ``basis``), so the figure is a linear least
+    squares within the variables' bounds, solved by SciPy's BVLS (an active-set method: the
+    exact optimum).  Kept only where the model accepts the solution and its highlight lies inside
+    the band (:func:`plausible.fitting.metrics.highlight_excess` zero: the highlight term, never
+    negative, adds nothing, so the optimum of the sum) or has no weight (``highlight=0``); then
+    ``obj`` holds it as its best point.
+    Returns the variables, or None (the iterative fit decides)."""
+    pb = obj.problem
+    if pb.metric != "l2-cos" or not obj.vars:
+        return None
+    from scipy.optimize import lsq_linear
+
+    names = {v.name for v in obj.vars}
+    key = tuple(sorted((k, repr(v)) for k, v in obj.params0.items() if k not in names))
+    if key not in basis:
+        basis[key] = _colour_basis(obj, x_shared)
+    if basis[key] is None:
+        return None
+    c0, B = basis[key]
+    g = np.asarray(obj.g, float).reshape(-1)
+    den = math.sqrt(float(np.sum(g * g)))
+    if den == 0.0:
+        return None
+    lo, hi = [np.array([v.bounds[k] for v in obj.vars]) for k in (0, 1)]
+    x = np.clip(lsq_linear(B / den, (g - c0) / den, bounds=(lo, hi), method="bvls").x, lo, hi)
+    if pb.highlight > 0.0 and np.any(M.highlight_excess(c0 + B @ x, g, pb.rows, pb.eps) != 0.0):
+        return None
+    rejected = obj.rejected
+    obj.residuals_many([x])              # the model at the solution: accepted, and kept as the best point
+    return x if obj.rejected == rejected else None
 
 
 def _reduce(f, wo, c):
@@ -863,43 +959,46 @@ def _reduce_alb(a, c):
     return a
 
 
-def _feasible(info, params, vars_, x, rng, tries=50):
+def _feasible(proto, params, vars_, x, rng, tries=50):
+    """``x``, or a seeded uniform point in the variables where the model rejects ``x``
+    (its constraints between parameters, :func:`candidate`); ``x`` after ``tries``."""
     for _ in range(tries):
         ps = dict(params)
         ps.update({v.name: v.inv(xi) for v, xi in zip(vars_, x)})
         try:
-            info.cls(**ps)
+            candidate(proto, ps)
             return list(x)
         except ValueError:
             x = [rng.uniform(*v.bounds) for v in vars_]
     return list(x)
 
 
-def _free_params(info, proto, fixed, tgt):
-    """Numeric parameters not fixed by the caller that change f on the sample set."""
-    ref = proto.eval(tgt.wi, tgt.wo)
-    out = []
+def _free_params(info, proto, fixed, values):
+    """Numeric parameters not fixed by the caller that change f on the sample set: each moved
+    to 0.37 and 0.73 of its variable's range, every such model evaluated in one launch
+    (``values``, the fit's :class:`_Values`)."""
+    probes, models = [], [proto]
     for p in info.params:
         if p.name in fixed or not p.numeric or p.integer or p.default is None:
             continue
         v = _Var(p)
-        changed = False
         for frac in (0.37, 0.73):
             ps = dict(proto.params)
             ps[p.name] = v.inv(v.bounds[0] + frac * (v.bounds[1] - v.bounds[0]))
             try:
-                alt = info.cls(**ps).eval(tgt.wi, tgt.wo)
+                models.append(candidate(proto, ps))
+                probes.append(p)
             except ValueError:
                 continue
-            if not np.allclose(alt, ref, rtol=1e-12, atol=0):
-                changed = True
-                break
-        if changed:
+    ref, *alts = [f for f, _ in values.many(models)]
+    out = []
+    for p, alt in zip(probes, alts):
+        if p not in out and not np.allclose(alt, ref, rtol=1e-12, atol=0):
             out.append(p)
-    return out
+    return [p for p in info.params if p in out]
 
 
-def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
+def evaluate_fit(model, target, eps=None, combine: str = "sum", rows=None) -> dict:
     """Every metric's figure of ``model`` against ``target`` (albedo by the
     accurate integrator :func:`plausible.analysis.albedo_curve`).
 
@@ -917,9 +1016,12 @@ def evaluate_fit(model, target, eps=None, combine: str = "sum") -> dict:
         the model's directional albedo at the target's ``thetas`` (an array,
         channel-averaged to the target's shape), or None without a target albedo.
 
+    ``rows``: the target's highlight (:func:`plausible.fitting.metrics.highlight_rows`), if known.
+
     Example: ``evaluate_fit(fit.model, "material:nickel@ngan2005/ward")["errors"]["log"]``."""
     tgt = as_target(target)
-    rows = M.highlight_rows(np.broadcast_to(tgt.wi, np.shape(tgt.wo)), tgt.fcos)
+    if rows is None:
+        rows = M.highlight_rows(np.broadcast_to(tgt.wi, np.shape(tgt.wo)), tgt.fcos)
     f = _fcos(model.eval(tgt.wi, tgt.wo), tgt.wo)
     g = tgt.fcos
     if f.ndim < g.ndim:

@@ -125,8 +125,12 @@ def highlight_rows(wi, g, max_theta_deg: float = HIGHLIGHT_MAX_THETA) -> np.ndar
     wi = np.asarray(wi, float).reshape(-1, 3)
     g = np.asarray(g, float)
     g = g.mean(axis=-1) if g.ndim == 2 else g
-    _, group = np.unique(np.round(wi, 12), axis=0, return_inverse=True)
-    group = group.reshape(-1)
+    r = np.round(wi, 12) + 0.0              # -0.0 and 0.0 one incidence
+    # the distinct incidences by a lexicographic sort (np.unique(axis=0) sorts a structured view: 10x slower)
+    o = np.lexsort(r.T[::-1])
+    new = np.r_[True, np.any(r[o][1:] != r[o][:-1], axis=1)]
+    group = np.empty(len(r), dtype=np.intp)
+    group[o] = np.cumsum(new) - 1
     order = np.lexsort((-g, group))
     first = np.r_[True, group[order][1:] != group[order][:-1]]
     rows = order[first]

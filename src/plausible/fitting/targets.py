@@ -30,9 +30,24 @@ class Target:
     label: str = "target"
     peaks: list = field(default_factory=list)
 
+    #: what :meth:`derived` computed, with the fingerprint of the arrays it was computed from
+    _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
     @property
     def channels(self):
         return self.fcos.shape[-1] if self.fcos.ndim == 2 else None
+
+    def derived(self, name: str, fn):
+        """``fn(self)``, remembered under ``name`` while the target is unchanged (the same model
+        object and the same bytes of ``wi``, ``wo``, ``fcos``: a fingerprint taken at each call,
+        about 0.1 ms, so an array changed in place is seen).  What a fit derives from its target
+        alone (the highlight rows, whether it is isotropic) is computed once for many fits."""
+        mark = (id(self.model),) + tuple(hash(np.ascontiguousarray(a).tobytes()) + hash(np.shape(a))
+                                         for a in (self.wi, self.wo, self.fcos))
+        hit = self._memo.get(name)
+        if hit is None or hit[0] != mark:
+            hit = self._memo[name] = (mark, fn(self))
+        return hit[1]
 
 
 def load_table(path):
