@@ -692,17 +692,19 @@ def _image_error(model, r):
 
 
 def metallic_decision(model, r, metric, probe, target, notes, margin: float = METALLIC_MARGIN):
-    """The glTF fit ``r`` if its metallic is 0 or 1, or a fractional one lowers the image error
-    (:func:`_image_error`; the figure minimised where nothing renders) by ``margin`` (a fraction)
-    against the better end refitted with metallic fixed; else that end.  (A fractional metallic
-    mixes a metal into a dielectric: a red plastic becomes a red metal.)"""
+    """The glTF material of the lowest image error (:func:`_image_error`; the figure minimised where
+    nothing renders) of the ends -- the dielectric with KHR_materials_specular's factors
+    (:data:`.mitsuba.GLTF_DIELECTRIC`) and the metal (metallic 1; the free fit ``r`` where it ended there),
+    each fitted; a fractional metallic of ``r`` only where its image error is lower than the better
+    end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric).  An end is
+    never kept unjudged: the albedo band as a constraint (:data:`.mitsuba.BAND_HARD`) drove a plastic whose
+    reflectance does not rise at grazing (an MTL ``Ks``) to metallic 1, a red plastic made a red metal."""
     from . import mitsuba as CM
 
     m = float(r.point.get("metallic", r.dict.get("metallic", 0.0)))
-    if m in (0.0, 1.0):
-        return r
-    ends = [CM.fit_family(model, CM.gltf_fixed_metallic(v), metric, probe=probe, target=target, hard=r.hard)
-            for v in (0.0, 1.0)]
+    # the free fit at metallic 1 is the metal end; at 0, a point of the dielectric end's grid
+    ends = [CM.fit_family(model, fam, metric, probe=probe, target=target, hard=r.hard) if fam else r
+            for fam in (CM.GLTF_DIELECTRIC, None if m == 1.0 else CM.gltf_fixed_metallic(1.0))]
     scores = [_image_error(model, x) for x in [r] + ends]
     if all(x is not None for x in scores):
         what, (sr, *se) = "image error (HDR-FLIP beside the source)", scores
@@ -710,13 +712,23 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
         what, sr, se = "figure minimised", r.figure, [x.figure for x in ends]
     k = int(np.argmin(se))
     e = ends[k]
-    said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}, {se[k]:.3g} at metallic {e.dict['metallic']:g}"
+    tried = ", ".join(f"{_gltf_label(x)} {s:.3g}" for x, s in zip(ends, se))
+    if m in (0.0, 1.0):
+        notes.append(f"{_gltf_label(e)} chosen by the {what}: {tried}")
+        return e
+    said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}; {tried}"
     if sr <= (1.0 - margin) * se[k]:
-        notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower)")
+        notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower than the better end)")
         return r
-    notes.append(f"metallic {e.dict['metallic']:g}: {said} (a fractional metallic is kept only where it is more "
+    notes.append(f"{_gltf_label(e)}: {said} (a fractional metallic is kept only where it is more "
                  f"than {margin:.0%} lower)")
     return e
+
+
+def _gltf_label(r) -> str:
+    d = r.dict
+    spec = [f"{k} {float(d[k]):.3g}" for k in ("specular", "specular_color") if k in d and not isinstance(d[k], dict)]
+    return f"metallic {float(d.get('metallic', 0.0)):g}" + (f" ({', '.join(spec)})" if spec else "")
 
 
 #: Sample side of the check that a candidate renders what it evaluates to (:func:`degenerate`).

@@ -58,8 +58,8 @@ import numpy as np
 
 from ..fitting import metrics as M
 
-__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fit_family", "gltf_fixed_metallic",
-           "measure", "probe_for", "sampler_albedo", "source_target"]
+__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "GLTF_DIELECTRIC", "Probe", "candidates", "fit_family",
+           "gltf_fixed_metallic", "measure", "probe_for", "sampler_albedo", "source_target"]
 
 #: Incidences (degrees) of the albedo comparison in every report.
 REPORT_THETAS = (0.0, 45.0, 75.0)
@@ -689,6 +689,25 @@ def gltf_fixed_metallic(value: float) -> Family:
     f = FAMILIES["gltf-pbr"]
     return Family(f.type, (("metallic", float(value)),), tuple(a for a in f.axes if a.name != "metallic"),
                   f.slots, f.offset)
+
+
+#: The glTF dielectric (``metallic`` 0) with KHR_materials_specular's two factors as axes (grey): its
+#: Fresnel runs from ``f0 = min(0.04 specular_color, 1) specular`` at normal incidence to ``f90 =
+#: specular`` at grazing (:mod:`plausible.models.gltf_pbr`), so a white lobe whose reflectance does not
+#: rise at grazing (an MTL ``Ks`` with Blinn's lobe: ``fresnel=none``; Ngan et al.'s fits, whose Schlick
+#: ``F0`` is near 1 under a small colour weight) is held with its width and its albedo together.  The core
+#: dielectric (``specular = specular_color = 1``: ``f0`` 0.04 rising to 1) must spend roughness to keep
+#: such a source's grazing albedo within the band: the MTL ``red_plastic`` (Kd 0.5 0.1 0.1, Ks 0.04,
+#: Ns 200) came out at roughness 0.48 and 0.34x its highlight, or as a red metal (metallic 1, FLIP 0.385);
+#: with the factors it is roughness 0.30, ``specular`` 0.036, ``specular_color`` 25 (``f0 = f90 = 0.036``),
+#: highlight 0.72-0.90x, FLIP 0.077 (docs/convert.md).  The colour of the lobe stays white: a tinted
+#: ``specular_color`` makes the channels' bases differ, which the fit's one-channel bases (:func:`basis`)
+#: do not hold.
+GLTF_DIELECTRIC = Family("gltf-pbr", (("metallic", 0.0),),
+                         (FAMILIES["gltf-pbr"].axes[0],
+                          Axis("specular", (0.06, 0.2, 0.5, 1.0), 0.01, 1.0),
+                          Axis("specular_color", (1.0, 4.0, 25.0), 0.25, 25.0)),
+                         ("base_color",), offset=True)
 
 
 def _product(lists):
