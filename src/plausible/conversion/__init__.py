@@ -693,9 +693,9 @@ def _image_error(model, r):
 
 def metallic_decision(model, r, metric, probe, target, notes, margin: float = METALLIC_MARGIN):
     """The glTF material of the lowest image error (:func:`_image_error`; the figure minimised where
-    nothing renders) of the ends -- the dielectric with KHR_materials_specular's factors
-    (:data:`.mitsuba.GLTF_DIELECTRIC`) and the metal (metallic 1; the free fit ``r`` where it ended there),
-    each fitted; a fractional metallic of ``r`` only where its image error is lower than the better
+    nothing renders) of the ends -- the dielectric with KHR_materials_specular's factors, its lobe
+    tinted as the source's (:func:`.mitsuba.gltf_dielectric`, :func:`.mitsuba.lobe_tint`), and the metal
+    (metallic 1; the free fit ``r`` where it ended there) -- each fitted; a fractional metallic of ``r`` only where its image error is lower than the better
     end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric).  An end is
     never kept unjudged: the albedo band as a constraint (:data:`.mitsuba.BAND_HARD`) drove a plastic whose
     reflectance does not rise at grazing (an MTL ``Ks``) to metallic 1, a red plastic made a red metal."""
@@ -703,8 +703,9 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
 
     m = float(r.point.get("metallic", r.dict.get("metallic", 0.0)))
     # the free fit at metallic 1 is the metal end; at 0, a point of the dielectric end's grid
+    tint = np.ones(3) if target is None else CM.lobe_tint(model, target[1][0])
     ends = [CM.fit_family(model, fam, metric, probe=probe, target=target, hard=r.hard) if fam else r
-            for fam in (CM.GLTF_DIELECTRIC, None if m == 1.0 else CM.gltf_fixed_metallic(1.0))]
+            for fam in (CM.gltf_dielectric(tint), None if m == 1.0 else CM.gltf_fixed_metallic(1.0))]
     scores = [_image_error(model, x) for x in [r] + ends]
     if all(x is not None for x in scores):
         what, (sr, *se) = "image error (HDR-FLIP beside the source)", scores
@@ -727,7 +728,8 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
 
 def _gltf_label(r) -> str:
     d = r.dict
-    spec = [f"{k} {float(d[k]):.3g}" for k in ("specular", "specular_color") if k in d and not isinstance(d[k], dict)]
+    spec = [f"{k} {' '.join(f'{v:.3g}' for v in np.atleast_1d(np.asarray(d[k], float)))}"
+            for k in ("specular", "specular_color") if k in d and not isinstance(d[k], dict)]
     return f"metallic {float(d.get('metallic', 0.0)):g}" + (f" ({', '.join(spec)})" if spec else "")
 
 
