@@ -696,7 +696,10 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
     nothing renders) of the ends -- the dielectric with KHR_materials_specular's factors, its lobe
     tinted as the source's (:func:`.mitsuba.gltf_dielectric`, :func:`.mitsuba.lobe_tint`), and the metal
     (metallic 1; the free fit ``r`` where it ended there) -- each fitted; a fractional metallic of ``r`` only where its image error is lower than the better
-    end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric).  An end is
+    end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric), and an end that
+    needs KHR_materials_specular over one that does not likewise and by more than :data:`IMAGE_NOISE` (a
+    tinted dielectric with ``specular`` 1 is a metal's Schlick Fresnel exactly: on a tie the core material,
+    which every viewer reads).  An end is
     never kept unjudged: the albedo band as a constraint (:data:`.mitsuba.BAND_HARD`) drove a plastic whose
     reflectance does not rise at grazing (an MTL ``Ks``) to metallic 1, a red plastic made a red metal."""
     from . import mitsuba as CM
@@ -712,6 +715,11 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
     else:
         what, sr, se = "figure minimised", r.figure, [x.figure for x in ends]
     k = int(np.argmin(se))
+    core = [i for i, x in enumerate(ends) if not _extended(x)]
+    if _extended(ends[k]) and core:     # KHR_materials_specular only where it lowers the score by the margin
+        j = min(core, key=lambda i: se[i])
+        floor = IMAGE_NOISE if what.startswith("image") else 0.0
+        k = k if se[k] <= (1.0 - margin) * se[j] - floor else j
     e = ends[k]
     tried = ", ".join(f"{_gltf_label(x)} {s:.3g}" for x, s in zip(ends, se))
     if m in (0.0, 1.0):
@@ -724,6 +732,18 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
     notes.append(f"{_gltf_label(e)}: {said} (a fractional metallic is kept only where it is more "
                  f"than {margin:.0%} lower)")
     return e
+
+
+#: A difference of image error (HDR-FLIP) below this is the renders' noise, not a choice: plausible's
+#: Lambertian against Mitsuba's ``diffuse`` reads 0.019, 0.024 seed to seed (docs/looks.md); a glTF gold
+#: against itself converted read 0.0037 as a metal and 0.0033 as the tinted dielectric equal to it.
+IMAGE_NOISE = 0.02
+
+
+def _extended(r) -> bool:
+    """Whether the glTF fit ``r`` needs KHR_materials_specular (a factor other than 1)."""
+    d = r.dict
+    return any(k in d and np.any(np.asarray(d[k], float) != 1.0) for k in ("specular", "specular_color"))
 
 
 def _gltf_label(r) -> str:
