@@ -732,7 +732,7 @@ def gltf_fixed_metallic(value: float) -> Family:
 #: highlight 0.72-0.90x, FLIP 0.077 (docs/convert.md).  Grey here; :func:`gltf_dielectric` tints it.
 GLTF_DIELECTRIC = Family("gltf-pbr", (("metallic", 0.0),),
                          (FAMILIES["gltf-pbr"].axes[0],
-                          Axis("specular", (0.06, 0.2, 0.5, 1.0), 0.01, 1.0),
+                          Axis("specular", tuple(float(x) for x in np.geomspace(0.03, 1.0, 7)), 0.01, 1.0),
                           Axis("specular_color", (1.0, 4.0, 25.0), 0.25, 25.0)),
                          ("base_color",), offset=True)
 
