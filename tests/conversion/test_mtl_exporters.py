@@ -317,8 +317,11 @@ def test_a_fractional_metallic_is_kept_only_where_it_lowers_the_figure_by_the_ma
     notes = []
     out = metallic_decision(None, r, "perceptual", None, None, notes)
     assert out.dict["metallic"] == kept and len(notes) == 1
-    # a metallic already at an end is not refitted
+    # a metallic already at an end is judged beside both ends fitted (issue 40: the band drove a red plastic
+    # to metallic 1, kept unjudged): the free fit at metallic 1 is the metal end, the dielectric fitted beside it
     end = CM.FamilyFit("gltf-pbr", {"type": "gltf-pbr", "metallic": 1.0}, {"metallic": 1.0}, {}, {}, 0, 9.0, "gltf-pbr")
+    assert metallic_decision(None, end, "perceptual", None, None, []).figure == ends[0]
+    end.figure = 0.5
     assert metallic_decision(None, end, "perceptual", None, None, []) is end
 
 

@@ -145,15 +145,18 @@ def test_scaled_form_is_the_paper_model_at_ks_1_and_scales_the_lobe():
 @pytest.mark.parametrize("spec", ["material:alum-bronze@ngan2005/ward", "material:nickel@ngan2005/ashikhmin-shirley"])
 def test_published_fits_converted_to_gltf_keep_the_albedo_and_say_what_the_highlight_lost(spec):
     """The issue's case: these conversions to glTF were matte (peaks 0.011-0.018 of the source's
-    at 0 and 30 degrees, measured on 6bc24da) without a word.  The glTF lobe cannot follow these
-    sources' albedo and highlight at once (its Schlick rise at grazing); the albedo is the constraint
-    (within 0.05 at 0/45/75 deg), and where the head-on highlight (the independent peak above) is
-    off by more than a factor 2, the conversion says it traded the highlight at 0 deg away."""
+    at 0 and 30 degrees, measured on 6bc24da) without a word.  The albedo is the constraint (within
+    0.05 at 0/45/75 deg), and where the head-on highlight as rendered under compare_looks' lamp (Mitsuba,
+    independent of the fit) is outside the band, the conversion says it traded the highlight at 0 deg
+    away.  (Not the point peak above: a point light's highlight on these lobes is smaller than a pixel,
+    docs/looks.md; nickel's glTF dielectric, roughness 0.16 against the source's A-S exponent 1030, renders
+    0.77x the source's highlight with a point peak more than 2x its.)"""
+    from plausible.mitsuba.looks import HIGHLIGHT_BAND
+
     c = plausible.convert(spec, to="gltf").items[0]
-    src = plausible.registry.make_from_spec(spec)
     assert max(v["max_abs_difference"] for v in c.albedo.values()) <= 0.05
-    q = peak(c.result, 0.0) / peak(src, 0.0)
-    if not 0.5 < q < 2.0:
+    q = c.looks.highlight_ratios[0]
+    if not HIGHLIGHT_BAND[0] <= q <= HIGHLIGHT_BAND[1]:
         (trade,) = [w for w in c.warnings if w.startswith("highlight traded for the albedo")]
         assert ("lost at 0 deg" if q < 1 else "invented at 0 deg") in trade, (q, trade)
 

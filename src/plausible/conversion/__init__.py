@@ -692,31 +692,65 @@ def _image_error(model, r):
 
 
 def metallic_decision(model, r, metric, probe, target, notes, margin: float = METALLIC_MARGIN):
-    """The glTF fit ``r`` if its metallic is 0 or 1, or a fractional one lowers the image error
-    (:func:`_image_error`; the figure minimised where nothing renders) by ``margin`` (a fraction)
-    against the better end refitted with metallic fixed; else that end.  (A fractional metallic
-    mixes a metal into a dielectric: a red plastic becomes a red metal.)"""
+    """The glTF material of the lowest image error (:func:`_image_error`; the figure minimised where
+    nothing renders) of the ends -- the dielectric with KHR_materials_specular's factors, its lobe
+    tinted as the source's (:func:`.mitsuba.gltf_dielectric`, :func:`.mitsuba.lobe_tint`), and the metal
+    (metallic 1; the free fit ``r`` where it ended there) -- each fitted; a fractional metallic of ``r`` only where its image error is lower than the better
+    end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric), and an end that
+    needs KHR_materials_specular over one that does not likewise and by more than :data:`IMAGE_NOISE` (a
+    tinted dielectric with ``specular`` 1 is a metal's Schlick Fresnel exactly: on a tie the core material,
+    which every viewer reads).  An end is
+    never kept unjudged: the albedo band as a constraint (:data:`.mitsuba.BAND_HARD`) drove a plastic whose
+    reflectance does not rise at grazing (an MTL ``Ks``) to metallic 1, a red plastic made a red metal."""
     from . import mitsuba as CM
 
     m = float(r.point.get("metallic", r.dict.get("metallic", 0.0)))
-    if m in (0.0, 1.0):
-        return r
-    ends = [CM.fit_family(model, CM.gltf_fixed_metallic(v), metric, probe=probe, target=target, hard=r.hard)
-            for v in (0.0, 1.0)]
+    # the free fit at metallic 1 is the metal end; at 0, a point of the dielectric end's grid
+    tint = np.ones(3) if target is None else CM.lobe_tint(model, target[1][0])
+    ends = [CM.fit_family(model, fam, metric, probe=probe, target=target, hard=r.hard) if fam else r
+            for fam in (CM.gltf_dielectric(tint), None if m == 1.0 else CM.gltf_fixed_metallic(1.0))]
     scores = [_image_error(model, x) for x in [r] + ends]
     if all(x is not None for x in scores):
         what, (sr, *se) = "image error (HDR-FLIP beside the source)", scores
     else:
         what, sr, se = "figure minimised", r.figure, [x.figure for x in ends]
     k = int(np.argmin(se))
+    core = [i for i, x in enumerate(ends) if not _extended(x)]
+    if _extended(ends[k]) and core:     # KHR_materials_specular only where it lowers the score by the margin
+        j = min(core, key=lambda i: se[i])
+        floor = IMAGE_NOISE if what.startswith("image") else 0.0
+        k = k if se[k] <= (1.0 - margin) * se[j] - floor else j
     e = ends[k]
-    said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}, {se[k]:.3g} at metallic {e.dict['metallic']:g}"
+    tried = ", ".join(f"{_gltf_label(x)} {s:.3g}" for x, s in zip(ends, se))
+    if m in (0.0, 1.0):
+        notes.append(f"{_gltf_label(e)} chosen by the {what}: {tried}")
+        return e
+    said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}; {tried}"
     if sr <= (1.0 - margin) * se[k]:
-        notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower)")
+        notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower than the better end)")
         return r
-    notes.append(f"metallic {e.dict['metallic']:g}: {said} (a fractional metallic is kept only where it is more "
+    notes.append(f"{_gltf_label(e)}: {said} (a fractional metallic is kept only where it is more "
                  f"than {margin:.0%} lower)")
     return e
+
+
+#: A difference of image error (HDR-FLIP) below this is the renders' noise, not a choice: plausible's
+#: Lambertian against Mitsuba's ``diffuse`` reads 0.019, 0.024 seed to seed (docs/looks.md); a glTF gold
+#: against itself converted read 0.0037 as a metal and 0.0033 as the tinted dielectric equal to it.
+IMAGE_NOISE = 0.02
+
+
+def _extended(r) -> bool:
+    """Whether the glTF fit ``r`` needs KHR_materials_specular (a factor other than 1)."""
+    d = r.dict
+    return any(k in d and np.any(np.asarray(d[k], float) != 1.0) for k in ("specular", "specular_color"))
+
+
+def _gltf_label(r) -> str:
+    d = r.dict
+    spec = [f"{k} {' '.join(f'{v:.3g}' for v in np.atleast_1d(np.asarray(d[k], float)))}"
+            for k in ("specular", "specular_color") if k in d and not isinstance(d[k], dict)]
+    return f"metallic {float(d.get('metallic', 0.0)):g}" + (f" ({', '.join(spec)})" if spec else "")
 
 
 #: Sample side of the check that a candidate renders what it evaluates to (:func:`degenerate`).

@@ -58,8 +58,8 @@ import numpy as np
 
 from ..fitting import metrics as M
 
-__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "Probe", "candidates", "fit_family", "gltf_fixed_metallic",
-           "measure", "probe_for", "sampler_albedo", "source_target"]
+__all__ = ["Axis", "FAMILIES", "Family", "FamilyFit", "GLTF_DIELECTRIC", "Probe", "candidates", "fit_family",
+           "gltf_dielectric", "gltf_fixed_metallic", "lobe_tint", "measure", "probe_for", "sampler_albedo", "source_target"]
 
 #: Incidences (degrees) of the albedo comparison in every report.
 REPORT_THETAS = (0.0, 45.0, 75.0)
@@ -111,6 +111,9 @@ class Family:
     #: A blend of two families (``blendbsdf`` made by :func:`blend`): ``((prefix, Family), (prefix, Family))``,
     #: whose bases are the parts' bases weighted by ``1 - weight`` and ``weight`` (:func:`_basis_now`).
     parts: tuple = ()
+    #: ``(axis name, (r, g, b))``: that axis's value times this colour is the entry (a lobe's tint on a grey
+    #: level, :func:`gltf_dielectric`); the channels' bases then differ and are kept apart (:func:`_basis_now`).
+    tint: tuple = ()
 
     def bsdf_dict(self, point: dict, colours: dict) -> dict:
         """The ``mi.load_dict`` description at axis values ``point`` and slot colours
@@ -121,6 +124,9 @@ class Family:
             set_entry(d, k, v)
         for k, v in point.items():
             set_entry(d, k, float(v))
+        if self.tint:
+            name, rgb = self.tint
+            set_entry(d, name, [float(point[name]) * c for c in rgb])
         for k, v in colours.items():
             a = np.broadcast_to(np.asarray(v, float), (3,))
             set_entry(d, k, {"type": "rgb", "value": [float(x) for x in a]})
@@ -309,18 +315,27 @@ def _basis_now(probe: Probe, family: Family, point: dict):
             parts.append([scale * B for B in basis(probe, part, sub)])
         return tuple(np.concatenate([[a[0] + b[0]], a[1:], b[1:]]) for a, b in zip(*parts))
     zero = {s: 0.0 for s in family.slots}
+    ch = slice(None) if family.tint else 0           # a tinted family's channels differ: all three kept
     F0 = A0 = H0 = 0.0
     if family.offset:
         F0, A0, H0 = probe.measure_all(_load(family.bsdf_dict(point, zero)))
-        F0, A0, H0 = F0[:, 0], A0[:, 0], H0[:, 0]
-    Fs, As, Hs = [np.zeros(len(probe.wi)) + F0], [np.zeros(len(probe.thetas)) + A0], [np.zeros(len(probe.strip.wi)) + H0]
+        F0, A0, H0 = F0[:, ch], A0[:, ch], H0[:, ch]
+    c = (3,) if family.tint else ()
+    Fs, As, Hs = ([np.zeros((n,) + c) + B] for n, B in ((len(probe.wi), F0), (len(probe.thetas), A0),
+                                                        (len(probe.strip.wi), H0)))
     for s in family.slots:
         F, A, H = probe.measure_all(_load(family.bsdf_dict(point, {**zero, s: 1.0})))
-        Fs.append(F[:, 0] - F0)
-        As.append(A[:, 0] - A0)
-        Hs.append(H[:, 0] - H0)
+        Fs.append(np.broadcast_to(F[:, ch], Fs[0].shape) - F0)
+        As.append(np.broadcast_to(A[:, ch], As[0].shape) - A0)
+        Hs.append(np.broadcast_to(H[:, ch], Hs[0].shape) - H0)
     # the strip's values as its images (linear in f): a blend's, a candidate's images are sums of these
-    return np.array(Fs), np.array(As), np.moveaxis(np.stack(probe.strip.images(np.array(Hs).T)), -1, 0)
+    Hs = np.array(Hs)                                                  # (1 + J, S[, C])
+    flat = np.moveaxis(Hs, 0, -1).reshape(len(Hs[0]), -1)              # (S, [C x] (1 + J))
+    img = np.stack(probe.strip.images(flat))                          # (views, rows, res, [C x] (1 + J))
+    if family.tint:                                                   # -> (1 + J, C, views, rows, res)
+        img = np.moveaxis(img.reshape(img.shape[:3] + Hs.shape[2:] + Hs.shape[:1]), (-1, -2), (0, 1))
+        return np.array(Fs), np.array(As), img
+    return np.array(Fs), np.array(As), np.moveaxis(img, -1, 0)
 
 
 def basis(probe: Probe, family: Family, point: dict):
@@ -332,8 +347,16 @@ def basis(probe: Probe, family: Family, point: dict):
 # -- the colours at one point ---------------------------------------------------------------------
 
 def _predict(B, x):
-    """``B_0 + sum_j x_j B_j`` per channel: ``B`` (1 + J, K), ``x`` (J, C) -> (K, C)."""
+    """``B_0 + sum_j x_j B_j`` per channel: ``B`` (1 + J, K), or (1 + J, K, C) where the channels' bases
+    differ (a tinted family), ``x`` (J, C) -> (K, C)."""
+    if B.ndim == 3:
+        return np.stack([B[0][:, c] + B[1:, :, c].T @ x[:, c] for c in range(x.shape[1])], -1)
     return B[0][:, None] + B[1:].T @ x
+
+
+def _ch(B, c):
+    """Channel ``c``'s bases: ``B`` itself where the channels share them."""
+    return B[..., c] if B.ndim == 3 else B
 
 
 #: Weight of the albedo term ``E_a`` beside the lobe's ``E_f`` in what the fit minimises
@@ -411,8 +434,12 @@ class Highlight:
             x = full
         from ..mitsuba.looks import PEAK_FLOOR, _window_max
 
-        y = x @ self.w if x.shape[1] == len(self.w) else x.mean(axis=1) * self.w.sum()
-        lum = self.images[0] * self.w.sum() + np.tensordot(y, self.images[1:], 1)
+        if self.images.ndim == 5:                # the channels' own bases (1 + J, C, views, rows, res)
+            lum = sum(self.w[c] * (self.images[0, c] + np.tensordot(x[:, c], self.images[1:, c], 1))
+                      for c in range(len(self.w)))
+        else:
+            y = x @ self.w if x.shape[1] == len(self.w) else x.mean(axis=1) * self.w.sum()
+            lum = self.images[0] * self.w.sum() + np.tensordot(y, self.images[1:], 1)
         got = np.array([_window_max(v) for v in lum])
         return np.maximum(got, PEAK_FLOOR) / np.maximum(self.peaks, PEAK_FLOOR)
 
@@ -447,7 +474,9 @@ def _lsq(F, Alb, g, A, eps, metric, band=None):
 
     J, C = F.shape[0] - 1, g.shape[1]
     x = np.zeros((J, C))
+    F_all, Alb_all = F, Alb
     for c in range(C):
+        F, Alb = _ch(F_all, c), _ch(Alb_all, c)
         if metric == "l2-cos":
             rows, rhs = F[1:].T, g[:, c] - F[0]
         else:
@@ -562,7 +591,7 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
 
     x = x.copy()
     for c in range(x.shape[1]):
-        obj = ColourObjective(F, Alb, g[:, c:c + 1], A[:, c:c + 1], eps, metric, rows, hard,
+        obj = ColourObjective(_ch(F, c), _ch(Alb, c), g[:, c:c + 1], A[:, c:c + 1], eps, metric, rows, hard,
                               None if hl is None else hl.channel(x, c))
         obj(x[:, c])                             # the start is a candidate: never worse than it
         optimise(obj, [x[:, c].copy()], lambda: None)
@@ -689,6 +718,46 @@ def gltf_fixed_metallic(value: float) -> Family:
     f = FAMILIES["gltf-pbr"]
     return Family(f.type, (("metallic", float(value)),), tuple(a for a in f.axes if a.name != "metallic"),
                   f.slots, f.offset)
+
+
+#: The glTF dielectric (``metallic`` 0) with KHR_materials_specular's two factors as axes: its
+#: Fresnel runs from ``f0 = min(0.04 specular_color, 1) specular`` at normal incidence to ``f90 =
+#: specular`` at grazing (:mod:`plausible.models.gltf_pbr`), so a lobe whose reflectance does not
+#: rise at grazing (an MTL ``Ks`` with Blinn's lobe: ``fresnel=none``; Ngan et al.'s fits, whose Schlick
+#: ``F0`` is near 1 under a small colour weight) is held with its width and its albedo together.  The core
+#: dielectric (``specular = specular_color = 1``: ``f0`` 0.04 rising to 1) must spend roughness to keep
+#: such a source's grazing albedo within the band: the MTL ``red_plastic`` (Kd 0.5 0.1 0.1, Ks 0.04,
+#: Ns 200) came out at roughness 0.48 and 0.34x its highlight, or as a red metal (metallic 1, FLIP 0.385);
+#: with the factors it is roughness 0.30, ``specular`` 0.036, ``specular_color`` 25 (``f0 = f90 = 0.036``),
+#: highlight 0.72-0.90x, FLIP 0.077 (docs/convert.md).  Grey here; :func:`gltf_dielectric` tints it.
+GLTF_DIELECTRIC = Family("gltf-pbr", (("metallic", 0.0),),
+                         (FAMILIES["gltf-pbr"].axes[0],
+                          Axis("specular", tuple(float(x) for x in np.geomspace(0.03, 1.0, 7)), 0.01, 1.0),
+                          Axis("specular_color", (1.0, 4.0, 25.0), 0.25, 25.0)),
+                         ("base_color",), offset=True)
+
+
+def gltf_dielectric(tint=(1.0, 1.0, 1.0)) -> Family:
+    """:data:`GLTF_DIELECTRIC` with ``specular_color`` its axis's value times ``tint`` (RGB, largest 1: the
+    channel that sets ``max_value(F_d)``, so the diffuse weight is the same at every colour and the family
+    stays affine in ``base_color`` per channel).  ``f0_c = min(0.04 specular_color tint_c, 1) specular``:
+    a coloured lobe (a metal's, Ngan's ``chrome``) keeps its colour; ``f90`` is white (``specular``)."""
+    t = np.clip(np.asarray(tint, float), 0.0, None)
+    t = tuple(float(v) for v in (t / t.max() if np.all(np.isfinite(t)) and t.max() > 0 else np.ones(3)))
+    if t == (1.0, 1.0, 1.0):
+        return GLTF_DIELECTRIC
+    f = GLTF_DIELECTRIC
+    return Family(f.type, f.fixed, f.axes, f.slots, f.offset, tint=("specular_color", t))
+
+
+def lobe_tint(model, albedo0) -> np.ndarray:
+    """The colour of the lobes ``model`` does not declare diffuse, largest channel 1: its albedo at normal
+    incidence ``albedo0`` (three channels) less the declared diffuse lobes' (:func:`diffuse_albedo`);
+    white where that is not positive or not known."""
+    spec = np.asarray(albedo0, float).reshape(-1)[:3] - diffuse_albedo(model)
+    if not np.all(np.isfinite(spec)) or spec.max() <= 1e-9:
+        return np.ones(3)
+    return np.clip(spec, 0.0, None) / spec.max()
 
 
 def _product(lists):
