@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from plausible.blender.principled import node_script, principled_inputs, write_blender
+from plausible.blender.principled import blender_material, node_script, principled_inputs, write_blender
 from plausible.cli import main
 
 
@@ -15,7 +15,20 @@ class TestMapping:
         p = principled_inputs(dict(base_color=[0.5, 0.2, 0.1], metallic=0.25, roughness=0.4, specular=0.6,
                                    specular_color=[1.0, 0.9, 0.8]))
         assert p == {"Base Color": [0.5, 0.2, 0.1], "Metallic": 0.25, "Roughness": 0.4, "IOR": 1.5,
-                     "Specular IOR Level": 0.3, "Specular Tint": [1.0, 0.9, 0.8]}
+                     "Specular IOR Level": 0.3, "Specular Tint": [1.0, 0.9, 0.8], "distribution": "GGX"}
+
+    def test_a_dielectric_part_becomes_gltfs_formula_as_nodes(self):
+        p = blender_material(dict(base_color=[0.5, 0.2, 0.1], metallic=0.25, roughness=0.4, specular=0.6,
+                                  specular_color=[1.0, 0.9, 0.8]))
+        g = p["gltf_nodes"]
+        f0 = 0.04 * np.array([1.0, 0.9, 0.8]) * 0.6                # KHR_materials_specular: min(0.04 c, 1) s
+        np.testing.assert_allclose(np.array(g["f0_over_specular"]) * g["specular"], f0, rtol=1e-12)
+        np.testing.assert_allclose(g["diffuse"], np.array([0.5, 0.2, 0.1]) * (1 - f0.max()), rtol=1e-12)
+        assert (g["metallic"], g["roughness"]) == (0.25, 0.4)
+        assert "gltf_nodes" not in blender_material(dict(metallic=1.0))            # a metal: one Principled
+        assert "gltf_nodes" not in blender_material(dict(metallic=0.0), nodes="principled")
+        with pytest.raises(ValueError, match="nodes: one of gltf, principled"):
+            blender_material({}, nodes="group")
 
     @pytest.mark.parametrize("r, s", [(0.3, 0.2), (0.5, 0.4), (0.2, 0.3)])
     def test_anisotropy_keeps_gltfs_alpha_ratio_and_geometric_mean(self, r, s):
@@ -83,3 +96,30 @@ def test_check_blender_passes_a_diffuse_material_of_a_blend_file(blender, tmp_pa
     rep = json.loads(r.stdout)
     assert r.exit_code == 0 and rep["passed"]
     assert rep["results"][1]["figure"] == pytest.approx(0.8, abs=2e-3)     # energy: the furnace reads 0.8
+
+
+def _cycles_beside_gltf(tmp_path, params, inputs):
+    from plausible import registry
+    from plausible.blender.looks import compare_cycles
+
+    pytest.importorskip("mitsuba")
+    write_blender({"m": inputs}, tmp_path / "m.py")
+    return compare_cycles(registry.make("gltf-pbr", **params), {"script": str(tmp_path / "m.py")},
+                          angles=(0.0, 120.0, 150.0), res=48)
+
+
+def test_a_rough_metal_renders_as_bright_as_gltf_pbr_single_scatter(blender, tmp_path):
+    # Multiscatter GGX (a new node's default) made it 1.2x brighter than gltf-pbr's single scattering
+    p = dict(base_color=[0.9, 0.9, 0.9], metallic=1.0, roughness=0.6)
+    lk = _cycles_beside_gltf(tmp_path, p, principled_inputs(p))
+    np.testing.assert_allclose(lk.highlight_ratios, 1.0, atol=0.03)
+
+
+def test_a_plastic_keeps_gltfs_schlick_highlight_at_60_degrees(blender, tmp_path):
+    # the Principled dielectric's exact Fresnel (IOR 1.5) is 1.25x Schlick's F0 = 0.04 at 60 degrees
+    # (the 120-degree view's mirror pair); glTF's formula as nodes keeps Schlick's
+    p = dict(base_color=[0.5, 0.1, 0.1], metallic=0.0, roughness=0.35)
+    lk = _cycles_beside_gltf(tmp_path, p, blender_material(p))
+    np.testing.assert_allclose(lk.highlight_ratios, 1.0, atol=0.03)
+    one = _cycles_beside_gltf(tmp_path, p, blender_material(p, nodes="principled"))
+    assert one.highlight_ratios[1] > 1.15 and lk.flip < one.flip
