@@ -2,6 +2,7 @@
 
     PYTHONPATH=src python scripts/blender_looks.py floor      # Diffuse vs diffuse: the comparison's floor
     PYTHONPATH=src python scripts/blender_looks.py mapping    # gltf-pbr vs its Principled BSDF, per variant
+    PYTHONPATH=src python scripts/blender_looks.py table [gltf|principled]   # convert --to blender, scored
 
 Prints a Markdown table per part (FLIP, per view, highlight ratios, seconds)."""
 
@@ -58,5 +59,45 @@ def mapping():
             print(row(f"{name} | {vname}", lk, time.perf_counter() - t), flush=True)
 
 
+MTL = {"wood": "newmtl wood\nKd 0.6 0.4 0.2\nKs 0 0 0\nillum 1\n",
+       "red_plastic": "newmtl red_plastic\nKd 0.5 0.1 0.1\nKs 0.04 0.04 0.04\nNs 200\nillum 2\n"}
+PUBLISHED = ("gold-metallic-paint@ngan2005/cook-torrance", "red-plastic@ngan2005/cook-torrance",
+             "alum-bronze@ngan2005/cook-torrance")
+
+
+def table(nodes="gltf"):
+    import tempfile
+    from pathlib import Path
+
+    from plausible.blender.convert import convert_to_blender
+
+    print("| source | written | albedo diff. source / fit | FLIP source / fit | highlight vs source (0/60/120/150) "
+          "| FLIP glTF fit vs source (Mitsuba) | seconds |\n|---|---|---|---|---|---|---|")
+    tmp = Path(tempfile.mkdtemp(prefix="c46-"))
+    sources = []
+    for name, text in MTL.items():
+        (tmp / f"{name}.mtl").write_text(text)
+        sources.append((f"MTL {name}", str(tmp / f"{name}.mtl")))
+    sources += [(p, f"material:{p}") for p in PUBLISHED]
+    for label, src in sources:
+        t = time.perf_counter()
+        bc = convert_to_blender(src, tmp / "out.blend", nodes=nodes)
+        v = bc.verified[0]
+        item = bc.conversion.items[0]
+        lk = item.looks.flip if getattr(item, "looks", None) is not None else None
+        if lk is None:
+            from plausible.mitsuba.looks import compare_looks
+            from plausible.conversion import read_sources
+            lk = compare_looks(read_sources(src)[0].model, item.result, spp=64).flip
+        p = item.result.params
+        what = ("nodes" if "gltf_nodes" in v.inputs else "Principled") + \
+            f" base ({', '.join(f'{c:.2f}' for c in p['base_color'])}), metallic {p['metallic']:.2f}, " \
+            f"roughness {p['roughness']:.2f}"
+        rat = " / ".join(f"{r:.2f}" for r in v.highlight_ratios)
+        print(f"| {label} | {what} | {v.albedo_difference:.3f} / {v.fit_albedo_difference:.3f} | "
+              f"{v.flip:.3f} / {v.fit_flip:.3f} | {rat} | {lk:.3f} | {time.perf_counter() - t:.0f} |", flush=True)
+
+
 if __name__ == "__main__":
-    {"floor": floor, "mapping": mapping}[sys.argv[1] if len(sys.argv) > 1 else "floor"]()
+    what = sys.argv[1] if len(sys.argv) > 1 else "floor"
+    {"floor": floor, "mapping": mapping, "table": table}[what](*sys.argv[2:])
