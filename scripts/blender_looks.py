@@ -3,6 +3,7 @@
     PYTHONPATH=src python scripts/blender_looks.py floor      # Diffuse vs diffuse: the comparison's floor
     PYTHONPATH=src python scripts/blender_looks.py mapping    # gltf-pbr vs its Principled BSDF, per variant
     PYTHONPATH=src python scripts/blender_looks.py table [gltf|principled]   # convert --to blender, scored
+    PYTHONPATH=src python scripts/blender_looks.py mtlx       # convert --to materialx, MaterialX's validate()
 
 Prints a Markdown table per part (FLIP, per view, highlight ratios, seconds)."""
 
@@ -14,7 +15,7 @@ import time
 from plausible import registry
 from plausible.blender import material_spec
 from plausible.blender.looks import compare_cycles
-from plausible.blender.principled import principled_inputs
+from plausible.blender.principled import blender_material, principled_inputs, write_blender
 
 GLTF = {
     "metal, rough (0.6)": dict(base_color=[0.9, 0.9, 0.9], metallic=1.0, roughness=0.6),
@@ -25,11 +26,15 @@ GLTF = {
 }
 
 
-def variants(params):
-    """Principled inputs of ``params`` under each candidate mapping."""
+def variants(params, tmp):
+    """The worker's material spec of ``params`` under each candidate mapping."""
     base = principled_inputs(params)
-    yield "MULTI_GGX (the node's default)", dict(base, distribution="MULTI_GGX")
-    yield "GGX (single scatter)", dict(base, distribution="GGX")
+    yield "Principled, Multiscatter GGX (the node's default)", material_spec(principled=dict(base, distribution="MULTI_GGX"))
+    yield "Principled, GGX (single scatter)", material_spec(principled=dict(base, distribution="GGX"))
+    m = blender_material(params)
+    if "gltf_nodes" in m:
+        write_blender({"m": m}, tmp / "m.py")
+        yield "glTF's formula as nodes (Metallic BSDF F82 + Diffuse x (1 - F0))", {"script": str(tmp / "m.py")}
 
 
 def row(name, lk, t):
@@ -48,14 +53,19 @@ def floor(spps=(16, 64)):
             print(row(f"Diffuse {rd} | {spp}", lk, time.perf_counter() - t), flush=True)
 
 
-def mapping():
+def mapping(spp="64"):
+    import tempfile
+    from pathlib import Path
+
+    tmp = Path(tempfile.mkdtemp(prefix="c46-map-"))
+    print(f"{spp} spp\n")
     print("| gltf-pbr | Principled | FLIP | per view 0/60/120/150 | highlight ratios | seconds |\n"
           "|---|---|---|---|---|---|")
     for name, p in GLTF.items():
         model = registry.make("gltf-pbr", **p)
-        for vname, inputs in variants(p):
+        for vname, spec in variants(p, tmp):
             t = time.perf_counter()
-            lk = compare_cycles(model, material_spec(principled=inputs))
+            lk = compare_cycles(model, spec, spp=int(spp))
             print(row(f"{name} | {vname}", lk, time.perf_counter() - t), flush=True)
 
 
@@ -74,12 +84,7 @@ def table(nodes="gltf"):
     print("| source | written | albedo diff. source / fit | FLIP source / fit | highlight vs source (0/60/120/150) "
           "| FLIP glTF fit vs source (Mitsuba) | seconds |\n|---|---|---|---|---|---|---|")
     tmp = Path(tempfile.mkdtemp(prefix="c46-"))
-    sources = []
-    for name, text in MTL.items():
-        (tmp / f"{name}.mtl").write_text(text)
-        sources.append((f"MTL {name}", str(tmp / f"{name}.mtl")))
-    sources += [(p, f"material:{p}") for p in PUBLISHED]
-    for label, src in sources:
+    for label, src in _sources(tmp):
         t = time.perf_counter()
         bc = convert_to_blender(src, tmp / "out.blend", nodes=nodes)
         v = bc.verified[0]
@@ -98,6 +103,41 @@ def table(nodes="gltf"):
               f"{v.flip:.3f} / {v.fit_flip:.3f} | {rat} | {lk:.3f} | {time.perf_counter() - t:.0f} |", flush=True)
 
 
+def _sources(tmp):
+    out = []
+    for name, text in MTL.items():
+        (tmp / f"{name}.mtl").write_text(text)
+        out.append((f"MTL {name}", str(tmp / f"{name}.mtl")))
+    return out + [(p, f"material:{p}") for p in PUBLISHED]
+
+
+def mtlx():
+    """The same sources through ``plausible convert --to materialx``, each document read back from its file
+    and validated by MaterialX (``Document.validate()`` with the standard libraries)."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+    from plausible.export.materialx import check_materialx, read_materialx
+
+    tmp = Path(tempfile.mkdtemp(prefix="c46-mtlx-"))
+    print("| source | exit | materials (shaders) | validate() problems |\n|---|---|---|---|")
+    for label, src in _sources(tmp):
+        out = tmp / "out.mtlx"
+        r = CliRunner().invoke(main, ["convert", src, "--to", "materialx", "--out", str(out), "--json"])
+        text = out.read_text()
+        doc = read_materialx(text)
+        shaders = sorted({n.getCategory() for m in doc.getMaterialNodes() for n in
+                          __import__("MaterialX").getShaderNodes(m)})
+        problems = check_materialx(text)
+        print(f"| {label} | {r.exit_code} | {len(doc.getMaterialNodes())} ({', '.join(shaders)}) | "
+              f"{len(problems)}{': ' + '; '.join(problems) if problems else ''} |", flush=True)
+        json.loads(r.stdout)
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "floor"
-    {"floor": floor, "mapping": mapping, "table": table}[what](*sys.argv[2:])
+    {"floor": floor, "mapping": mapping, "table": table, "mtlx": mtlx}[what](*sys.argv[2:])

@@ -123,3 +123,50 @@ def test_a_plastic_keeps_gltfs_schlick_highlight_at_60_degrees(blender, tmp_path
     np.testing.assert_allclose(lk.highlight_ratios, 1.0, atol=0.03)
     one = _cycles_beside_gltf(tmp_path, p, blender_material(p, nodes="principled"))
     assert one.highlight_ratios[1] > 1.15 and lk.flip < one.flip
+
+
+class TestSourceLobes:
+    def test_a_cook_torrance_fit_is_written_as_its_own_lobes(self):
+        from plausible.conversion import read_sources
+        from plausible.spectra import luminance
+
+        model = read_sources("material:gold-metallic-paint@ngan2005/cook-torrance")[0].model
+        rd, w = model.parts[0].params["rd"], np.asarray(model.scales[1])
+        ct = model.parts[1].params
+        g = blender_material({}, "source", model)["ct_nodes"]
+        np.testing.assert_allclose(g["rd"], rd, rtol=1e-12)
+        (lobe,) = g["lobes"]
+        # w F_schlick = w rs + w (1 - rs)(1 - cos)^5: the constant part per channel, the rise's luminance
+        np.testing.assert_allclose(lobe["colour"], w * ct["rs"], rtol=1e-12)
+        assert lobe["grazing"] == pytest.approx(float(luminance(w * (1 - ct["rs"]))), rel=1e-12)
+        assert lobe["roughness"] ** 2 == pytest.approx(ct["m"], rel=1e-12)      # Cycles: alpha = roughness^2
+
+    def test_an_mtl_highlight_is_a_glossy_lobe_without_fresnel_and_others_take_the_gltf_fit(self, tmp_path):
+        from plausible import registry
+        from plausible.conversion import read_sources
+
+        (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+        g = blender_material({}, "source", read_sources(str(tmp_path / "p.mtl"))[0].model)["ct_nodes"]
+        assert g["rd"] == [0.5, 0.1, 0.1] and g["lobes"][0]["colour"] == [0.04, 0.04, 0.04]
+        assert g["lobes"][0]["grazing"] == 0.0                                   # F = rs: no Fresnel rise
+        ward = registry.make("ward", alpha_x=0.2, alpha_y=0.2)
+        assert "ct_nodes" not in blender_material(dict(metallic=0.0), "source", ward)
+        assert "gltf_nodes" in blender_material(dict(metallic=0.0), "source", ward)
+
+
+RED_PLASTIC = "newmtl red_plastic\nKd 0.5 0.1 0.1\nKs 0.04 0.04 0.04\nNs 200\nillum 2\n"
+
+
+def test_an_mtl_plastic_written_as_its_own_lobes_renders_like_its_source(blender, tmp_path):
+    # the glTF fit made this plastic a metal (highlight 0.66x at 0 degrees, 1.66x at 150; FLIP 0.385);
+    # its own lobes (Diffuse + Beckmann Glossy) render like it: FLIP at the floor, highlight 1
+    from plausible.blender.looks import FLIP_TOL, compare_cycles
+    from plausible.conversion import read_sources
+
+    pytest.importorskip("mitsuba")
+    (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+    model = read_sources(str(tmp_path / "p.mtl"))[0].model
+    write_blender({"p": blender_material({}, "source", model)}, tmp_path / "p.py")
+    lk = compare_cycles(model, {"script": str(tmp_path / "p.py")}, angles=(0.0, 120.0, 150.0), res=48)
+    np.testing.assert_allclose(lk.highlight_ratios, 1.0, atol=0.05)
+    assert lk.flip < FLIP_TOL

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .acquire import acquire as _acquire
-from .principled import TEXTURE_NODES, blender_material, write_blender
+from .principled import NODES, TEXTURE_NODES, blender_material, write_blender
 
 __all__ = ["BlenderConversion", "Verified", "convert_to_blender"]
 
@@ -141,12 +141,14 @@ def _looks(v: Verified, path: Path, name: str, source_model, fit_model) -> None:
 
 
 def convert_to_blender(source, out, metric: str = "perceptual", *, verify_looks: bool = True,
-                       verify_result: bool = True, nodes: str = "gltf", progress=None) -> BlenderConversion:
+                       verify_result: bool = True, nodes: str = "source", progress=None) -> BlenderConversion:
     """Convert every material of ``source`` (what :func:`plausible.conversion.convert` reads:
     an MTL file, a published fit, a model spec) to Principled BSDFs written to ``out``
     (``.blend`` or ``.py``), each verified in Cycles (``verify_result``; the look too where
-    ``verify_looks`` and Mitsuba is installed).  ``nodes``: ``"gltf"`` writes a dielectric part as
-    glTF's formula in nodes, ``"principled"`` as one Principled BSDF (:mod:`.principled`).
+    ``verify_looks`` and Mitsuba is installed).  ``nodes``: ``"source"`` writes a source that is a
+    Lambertian plus Cook-Torrance lobes as its own lobes and any other as ``"gltf"``; ``"gltf"``
+    writes the glTF fit, a dielectric part as glTF's formula in nodes; ``"principled"`` the glTF fit
+    as one Principled BSDF (:mod:`.principled`).
     ValueError naming ``out`` for a bad suffix, ``nodes`` for another choice."""
     from ..conversion import convert, read_sources
     from ..progress import start
@@ -154,18 +156,19 @@ def convert_to_blender(source, out, metric: str = "perceptual", *, verify_looks:
     out = Path(out)
     if out.suffix.lower() not in (".blend", ".py"):
         raise ValueError(f"out: a Blender output ends in .blend or .py, got {str(out)!r}")
-    if nodes not in ("gltf", "principled"):
-        raise ValueError(f"nodes: one of gltf, principled, got {nodes!r}")
+    if nodes not in NODES:
+        raise ValueError(f"nodes: one of {', '.join(NODES)}, got {nodes!r}")
     if not (out.parent if str(out.parent) else Path(".")).is_dir():
         raise ValueError(f"out: the folder of {str(out)!r} does not exist")
     conv = convert(source, to="gltf", metric=metric, looks=False)
+    models = {s.name: s.model for s in read_sources(source)}
     mats = {}
     for c in conv.items:
         if "transmission" in c.surface or not hasattr(c.result, "params"):
             conv.skipped.append({"name": c.name, "skipped": f"{c.name}: glass (transmission) is not written to "
                                  "Blender yet: the writer makes reflecting Principled BSDFs"})
             continue
-        mats[c.name] = blender_material(c.result.params, nodes)
+        mats[c.name] = blender_material(c.result.params, nodes, models.get(c.name))
     conv.items = [c for c in conv.items if c.name in mats]
     if not mats:
         raise ValueError(f"source: nothing to convert in {source!r} "
@@ -173,8 +176,7 @@ def convert_to_blender(source, out, metric: str = "perceptual", *, verify_looks:
     write_blender(mats, out, _textures(conv, out.parent.resolve()))
     verified = []
     if verify_result:
-        models = {s.name: s.model for s in read_sources(source)}
-        fits = {c.name: c.result for c in conv.items}
+        fits = {c.name: None if "ct_nodes" in mats[c.name] else c.result for c in conv.items}
         tick = start(progress, len(mats), "verify in Cycles")
         for name, inputs in mats.items():
             verified.append(verify(out, name, inputs, models[name], fit_model=fits[name], looks=verify_looks))
