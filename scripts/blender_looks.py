@@ -95,12 +95,15 @@ def table(nodes="gltf"):
             from plausible.conversion import read_sources
             lk = compare_looks(read_sources(src)[0].model, item.result, spp=64).flip
         p = item.result.params
-        what = ("nodes" if "gltf_nodes" in v.inputs else "Principled") + \
-            f" base ({', '.join(f'{c:.2f}' for c in p['base_color'])}), metallic {p['metallic']:.2f}, " \
+        glTF = f"glTF fit: base ({', '.join(f'{c:.2f}' for c in p['base_color'])}), metallic {p['metallic']:.2f}, " \
             f"roughness {p['roughness']:.2f}"
+        what = "source's lobes" if "ct_nodes" in v.inputs else ("glTF nodes, " if "gltf_nodes" in v.inputs
+                                                                 else "Principled, ") + glTF
         rat = " / ".join(f"{r:.2f}" for r in v.highlight_ratios)
-        print(f"| {label} | {what} | {v.albedo_difference:.3f} / {v.fit_albedo_difference:.3f} | "
-              f"{v.flip:.3f} / {v.fit_flip:.3f} | {rat} | {lk:.3f} | {time.perf_counter() - t:.0f} |", flush=True)
+        fa = "-" if v.fit_albedo_difference is None else f"{v.fit_albedo_difference:.3f}"
+        ff = "-" if v.fit_flip is None else f"{v.fit_flip:.3f}"
+        print(f"| {label} | {what} | {v.albedo_difference:.3f} / {fa} | {v.flip:.3f} / {ff} | {rat} | {lk:.3f} | "
+              f"{time.perf_counter() - t:.0f} |", flush=True)
 
 
 def _sources(tmp):

@@ -41,8 +41,8 @@ from . import runner
 __all__ = ["FLIP_TOL", "check_looks", "compare_cycles", "cycles_renders"]
 
 #: Largest mean HDR-FLIP a pair that is the same material on both sides may show: the floor of
-#: the comparison (Diffuse against diffuse measured at 0.02-0.03 at 64 px, 16 spp: the two
-#: renderers' Monte Carlo noise under the environment; docs/blender.md), with a margin.
+#: the comparison (Cycles' Diffuse against Mitsuba's diffuse: 0.027-0.032 at 64 px, 16 spp; 0.012-0.015
+#: at 64 spp: the two renderers' Monte Carlo noise under the environment; docs/blender.md), with a margin.
 FLIP_TOL = 0.05
 #: Columns of the environment map (it is constant along the azimuth).
 ENV_WIDTH = 128
