@@ -27,7 +27,7 @@ class TestMapping:
         assert (g["metallic"], g["roughness"]) == (0.25, 0.4)
         assert "gltf_nodes" not in blender_material(dict(metallic=1.0))            # a metal: one Principled
         assert "gltf_nodes" not in blender_material(dict(metallic=0.0), nodes="principled")
-        with pytest.raises(ValueError, match="nodes: one of gltf, principled"):
+        with pytest.raises(ValueError, match="nodes: one of source, gltf, principled"):
             blender_material({}, nodes="group")
 
     @pytest.mark.parametrize("r, s", [(0.3, 0.2), (0.5, 0.4), (0.2, 0.3)])
@@ -170,3 +170,13 @@ def test_an_mtl_plastic_written_as_its_own_lobes_renders_like_its_source(blender
     lk = compare_cycles(model, {"script": str(tmp_path / "p.py")}, angles=(0.0, 120.0, 150.0), res=48)
     np.testing.assert_allclose(lk.highlight_ratios, 1.0, atol=0.05)
     assert lk.flip < FLIP_TOL
+
+
+@pytest.mark.slow
+def test_convert_to_blender_table_names_what_was_written(blender, tmp_path):
+    # the CLI's table (not --json): an MTL plastic written as its own lobes, verified in Cycles (about 40 s)
+    (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+    r = CliRunner().invoke(main, ["convert", str(tmp_path / "p.mtl"), "--to", "blender", "--out",
+                                  str(tmp_path / "p.py")], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    assert "source's lobes: Diffuse (0.5, 0.1, 0.1)" in r.output.replace("\n", "")

@@ -55,6 +55,22 @@ class Verified:
     fit_highlight_ratio: float | None = None
     notes: list = field(default_factory=list)
 
+    def description(self) -> str:
+        """What was written, in a line: the source's lobes, glTF's formula as nodes, or the Principled inputs."""
+        def fmt(x):
+            return "(" + ", ".join(f"{c:.3g}" for c in x) + ")" if isinstance(x, list) else \
+                (f"{x:.3g}" if isinstance(x, float) else str(x))
+
+        if "ct_nodes" in self.inputs:
+            g = self.inputs["ct_nodes"]
+            return f"source's lobes: Diffuse {fmt(g['rd'])} + " + " + ".join(
+                f"Beckmann r {fmt(b['roughness'])} (Glossy {fmt(b['colour'])}, rise {fmt(b['grazing'])})" for b in g["lobes"])
+        g = self.inputs.get("gltf_nodes")
+        if g is not None:
+            return (f"glTF nodes: base {fmt(g['base_color'])}, metallic {fmt(g['metallic'])}, "
+                    f"roughness {fmt(g['roughness'])}, specular {fmt(g['specular'])}")
+        return "Principled: " + ", ".join(f"{k} {fmt(x)}" for k, x in self.inputs.items())
+
     def to_dict(self) -> dict:
         return dict(name=self.name, inputs=self.inputs, albedo_difference=self.albedo_difference,
                     albedo_theta_deg=self.albedo_theta_deg, albedo_stderr=self.albedo_stderr,
