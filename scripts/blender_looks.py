@@ -29,7 +29,8 @@ GLTF = {
 def variants(params, tmp):
     """The worker's material spec of ``params`` under each candidate mapping."""
     base = principled_inputs(params)
-    yield "Principled, Multiscatter GGX (the node's default)", material_spec(principled=dict(base, distribution="MULTI_GGX"))
+    yield ("Principled, Multiscatter GGX (the node's default)",
+           material_spec(principled=dict(base, distribution="MULTI_GGX")))
     yield "Principled, GGX (single scatter)", material_spec(principled=dict(base, distribution="GGX"))
     m = blender_material(params)
     if "gltf_nodes" in m:

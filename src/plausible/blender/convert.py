@@ -63,8 +63,9 @@ class Verified:
 
         if "ct_nodes" in self.inputs:
             g = self.inputs["ct_nodes"]
-            return f"source's lobes: Diffuse {fmt(g['rd'])} + " + " + ".join(
-                f"Beckmann r {fmt(b['roughness'])} (Glossy {fmt(b['colour'])}, rise {fmt(b['grazing'])})" for b in g["lobes"])
+            lobes = [f"Beckmann r {fmt(b['roughness'])} (Glossy {fmt(b['colour'])}, rise {fmt(b['grazing'])})"
+                     for b in g["lobes"]]
+            return f"source's lobes: Diffuse {fmt(g['rd'])} + " + " + ".join(lobes)
         g = self.inputs.get("gltf_nodes")
         if g is not None:
             return (f"glTF nodes: base {fmt(g['base_color'])}, metallic {fmt(g['metallic'])}, "

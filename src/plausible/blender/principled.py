@@ -67,8 +67,9 @@ cannot reach a coloured value below 1 at grazing: F82's is 1 there).  Measured o
 gold-metallic-paint: FLIP 0.063 this way, against 0.132 for one Metallic BSDF of F0
 ``w rs / max(w)`` with its F82 tint matched at 82 degrees and 0.140 with a white tint.
 What else differs: Cycles' shadowing is Smith's, the source's the V-groove of Cook and
-Torrance.  A lobe with ``F = rs`` (no Fresnel: an MTL's ``Ks``) is the Glossy BSDF alone; Blinn's distribution ``(n.h)^n`` is written as Beckmann's of the
-same slope ``m`` (``n = 2/m^2 - 2``, Walter et al. 2007: they agree near the peak).
+Torrance.  A lobe with ``F = rs`` (no Fresnel: an MTL's ``Ks``) is the Glossy BSDF alone;
+Blinn's distribution ``(n.h)^n`` is written as Beckmann's of the same slope ``m``
+(``n = 2/m^2 - 2``, Walter et al. 2007: they agree near the peak).
 
 Textures: an MTL ``map_Kd`` becomes an Image Texture node (colour space sRGB) times
 the fitted base colour (a Multiply mix, as MTL and glTF multiply), ``bump`` /
