@@ -246,6 +246,8 @@ def _looks_scene(job, mat):
     cam.data.ortho_scale = 2.0 * float(look["half_width"])
     sphere = scene.objects["sphere"]
     sphere.shadow_terminator_geometry_offset = 0.0      # an analytic sphere in Mitsuba: no terminator fix
+    sphere.rotation_euler = (math.pi / 2, 0.0, 0.0)     # its local axes Mitsuba's sphere's: the pole on Mitsuba's
+    #                                                     +z, the UV tangent (u along the azimuth) its dp/du
     sun.data.angle = 2.0 * math.radians(float(look["lamp_deg"]))
     sun.data.energy = float(look["irradiance"])
     _look_at(sun, _blender_axes([0.0, 0.0, 1.0]), up=np.array([0.0, 0.0, 1.0]))
