@@ -44,7 +44,9 @@ radius), ``irradiance`` and ``light_spp``.  Its ``RENDER`` s are ``{"kind": "loo
 ``5 (sin a, 0, cos a)``, up ``+y``), the unit sphere lit by the environment alone
 (``look_env``) or by a sun of angular radius ``lamp_deg`` and strength ``irradiance``
 from Mitsuba's ``+z`` alone (``look_light``, at ``light_spp`` samples), the background
-transparent (black, as Mitsuba's ``hide_emitters``), a box filter one pixel wide.
+transparent (black, as Mitsuba's ``hide_emitters``), a box filter one pixel wide, the
+sphere turned so that its pole and UV tangent are those of Mitsuba's sphere (pole on
+Mitsuba's ``+z``, tangent ``dp/du`` along the azimuth).
 """
 
 import json
