@@ -30,3 +30,13 @@ def test_fill_merl_table(benchmark):
     benchmark.pedantic(acq.brdf, rounds=2, iterations=1)
     record(benchmark, "blender", f"MERL table (1.46 M cells) from {len(acq.f)} measured pairs", backend="numpy",
            op="table", n=len(acq.f))
+
+
+@pytest.mark.parametrize("spp", [16, 64])
+def test_cycles_looks(benchmark, spp):
+    from plausible.blender.looks import cycles_renders
+
+    benchmark.pedantic(cycles_renders, args=(material_spec(principled=dict(METAL, distribution="GGX")),),
+                       kwargs=dict(spp=spp), rounds=2, iterations=1)
+    record(benchmark, "blender", f"compare_looks' scene in Cycles, 4 views of 64 px, {spp} spp (lamp {16 * spp})",
+           backend="cycles-cpu", op="looks", n=8)

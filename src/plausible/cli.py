@@ -892,15 +892,17 @@ def _convert_blender(source, out, metric, as_json):
         _echo_json(res.to_json())
     else:
         t = Table()
-        for col in ("material", "Principled BSDF", "albedo diff. (source / fit)", "stderr", "FLIP", "highlight"):
+        for col in ("material", "Blender material", "albedo diff. (source / fit)", "stderr", "FLIP", "highlight"):
             t.add_column(col)
         for v in res.verified:
-            inp = ", ".join(f"{k} {_fmt_input(x)}" for k, x in v.inputs.items())
-            t.add_row(escape(v.name), escape(inp), f"{v.albedo_difference:.3f} / {v.fit_albedo_difference:.3f}",
+            inp = v.description()
+            fit = "-" if v.fit_albedo_difference is None else f"{v.fit_albedo_difference:.3f}"
+            t.add_row(escape(v.name), escape(inp), f"{v.albedo_difference:.3f} / {fit}",
                       f"{v.albedo_stderr:.2g}", "-" if v.flip is None else f"{v.flip:.3f}",
                       "-" if v.highlight_ratio is None else f"x{v.highlight_ratio:.3g}")
         console.print(t)
-        console.print(f"wrote {escape(str(res.path))} (each material read back from it and acquired in Cycles)")
+        console.print(f"wrote {escape(str(res.path))} (each material read back from it, acquired in Cycles and "
+                      "rendered in Cycles beside its source in Mitsuba)")
     for v in res.verified:
         for w in v.notes:
             click.echo(f"warning: {v.name}: {w}", err=True)
@@ -909,9 +911,6 @@ def _convert_blender(source, out, metric, as_json):
     if res.conversion.skipped:
         raise SystemExit(1)
 
-
-def _fmt_input(x):
-    return "(" + ", ".join(f"{c:.3g}" for c in x) + ")" if isinstance(x, list) else f"{x:.3g}"
 
 
 def _convert_table(res, path):

@@ -5,8 +5,12 @@
   :mod:`.acquire`) into a measured BRDF (:class:`plausible.models.merl.MerlBRDF`) and a
   check report (reciprocity from swapped light and camera, energy from the furnace);
 * :func:`principled_inputs`, :func:`node_script`, :func:`write_blender`: a plausible
-  conversion (the glTF metallic-roughness fit) as a Principled BSDF, written as a
-  ``.blend`` or as a ``.py`` that builds the node tree (:mod:`.principled`).
+  conversion (the glTF metallic-roughness fit) as a Principled BSDF (GGX), glTF's formula in
+  nodes for a dielectric part, or a Lambertian plus Cook-Torrance source as its own lobes,
+  written as a ``.blend`` or as a ``.py`` that builds the node tree (:mod:`.principled`);
+* :func:`.looks.compare_cycles`, :func:`.looks.check_looks`: a Cycles material rendered in
+  the scene of :func:`plausible.compare_looks` beside a source in Mitsuba and scored
+  (HDR-FLIP, highlight ratio; :mod:`.looks`).
 
 Blender runs out of process (:mod:`.runner`): ``bpy`` pins ``numpy<2`` and lives in
 ``.venv-blender``, which ``make setup`` makes.  See docs/blender.md.

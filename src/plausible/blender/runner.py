@@ -54,8 +54,8 @@ def blender_python() -> Path:
 
 
 def run_job(material: dict, renders: list, *, resolution: int, spp: int, seed: int = 0,
-            save_blend=None, threads: int | None = None) -> list:
-    """Run one job of :mod:`.worker` (its docstring: ``material``, ``renders``) and
+            save_blend=None, threads: int | None = None, looks: dict | None = None) -> list:
+    """Run one job of :mod:`.worker` (its docstring: ``material``, ``renders``, ``looks``) and
     return the renders as float arrays ``(resolution, resolution, 3)``.
     ValueError naming the argument for a bad input (a material not in its file), RuntimeError
     with Blender's last lines when Blender fails otherwise."""
@@ -64,7 +64,8 @@ def run_job(material: dict, renders: list, *, resolution: int, spp: int, seed: i
     out = Path(tempfile.mkdtemp(prefix="plausible-blender-"))
     try:
         job = dict(material=material, renders=renders, out=str(out), resolution=int(resolution), spp=int(spp),
-                   seed=int(seed), threads=int(threads), save_blend=str(save_blend) if save_blend else None)
+                   seed=int(seed), threads=int(threads), save_blend=str(save_blend) if save_blend else None,
+                   looks=looks)
         (out / "job.json").write_text(json.dumps(job))
         p = subprocess.run([str(py), str(WORKER), str(out / "job.json")], capture_output=True, text=True,
                            timeout=TIMEOUT, env={**os.environ, "PYTHONWARNINGS": "ignore"})

@@ -33,6 +33,20 @@ width 0.01 pixel (each sample at the pixel centre, so a pixel is one normal),
 no denoiser, one bounce (a convex sphere sees only the light and the world).
 Each render writes ``DIR/render_K.npy``: float32 ``(resolution, resolution, 3)``
 linear RGB, row 0 at the top of the image.
+
+A job with ``"looks": {...}`` renders instead the scene of ``plausible.compare_looks``
+(``plausible.mitsuba.looks``), in Blender's axes: Mitsuba's ``(x, y, z)`` is Blender's
+``(x, -z, y)`` (Mitsuba's up, ``+y``, is Blender's ``+z``).  Keys: ``half_width`` (the
+orthographic half-width, 1.05), ``env_rows`` (the environment map's rows, top first, each
+one radiance; constant along the azimuth), ``env_width``, ``lamp_deg`` (the lamp's angular
+radius), ``irradiance`` and ``light_spp``.  Its ``RENDER`` s are ``{"kind": "look_env" or
+"look_light", "angle": a}``: the camera at ``a`` degrees from the lamp (Mitsuba's camera at
+``5 (sin a, 0, cos a)``, up ``+y``), the unit sphere lit by the environment alone
+(``look_env``) or by a sun of angular radius ``lamp_deg`` and strength ``irradiance``
+from Mitsuba's ``+z`` alone (``look_light``, at ``light_spp`` samples), the background
+transparent (black, as Mitsuba's ``hide_emitters``), a box filter one pixel wide, the
+sphere turned so that its pole and UV tangent are those of Mitsuba's sphere (pole on
+Mitsuba's ``+z``, tangent ``dp/du`` along the azimuth).
 """
 
 import json
@@ -101,7 +115,7 @@ def _untextured(mat):
     return mat
 
 
-def _look_at(obj, direction):
+def _look_at(obj, direction, up=None):
     """Place ``obj`` (camera or sun) along ``direction`` looking at the origin: its local
     ``+z`` along ``direction`` (it looks, or shines, along ``-z``), its ``+y`` (the image's
     up) toward world ``+y`` (world ``+x`` when ``direction`` is along ``y``), so a camera
@@ -109,7 +123,8 @@ def _look_at(obj, direction):
     from mathutils import Matrix
     z = np.asarray(direction, dtype=float)
     z = z / np.linalg.norm(z)
-    up = np.array([0.0, 1.0, 0.0]) if abs(z[1]) < 0.999 else np.array([1.0, 0.0, 0.0])
+    if up is None:
+        up = np.array([0.0, 1.0, 0.0]) if abs(z[1]) < 0.999 else np.array([1.0, 0.0, 0.0])
     x = np.cross(up, z)
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
@@ -202,6 +217,66 @@ def _render(scene, path):
     return px.reshape(h, w, 4)[::-1, :, :3].copy()     # Blender's rows start at the bottom
 
 
+def _blender_axes(v):
+    """Mitsuba's ``(x, y, z)`` in Blender's axes: ``(x, -z, y)``."""
+    return [v[0], -v[2], v[1]]
+
+
+def _env_image(look):
+    """The environment map as a float image (Blender's rows start at the bottom: Mitsuba's last row)."""
+    rows = np.asarray(look["env_rows"], dtype=np.float32)[::-1]
+    w, h = int(look["env_width"]), len(rows)
+    img = bpy.data.images.new("plausible_env", w, h, alpha=False, float_buffer=True)
+    img.colorspace_settings.name = "Non-Color"          # the values are scene-linear radiance as they are
+    px = np.ones((h, w, 4), dtype=np.float32)
+    px[..., :3] = rows[:, None, None]
+    img.pixels.foreach_set(px.ravel())
+    img.pack()
+    return img
+
+
+def _looks_scene(job, mat):
+    """The scene of ``compare_looks`` (module docstring), from the acquisition's scene."""
+    look = job["looks"]
+    scene, cam, sun, world = _scene(job, mat)
+    scene.render.film_transparent = True                # the background black, as Mitsuba's hide_emitters
+    scene.cycles.filter_width = 1.0                     # Mitsuba's box filter of radius 0.5 pixel
+    scene.cycles.sample_clamp_direct = scene.cycles.sample_clamp_indirect = 0.0
+    scene.cycles.light_sampling_threshold = 0.0
+    scene.cycles.blur_glossy = 0.0
+    scene.render.use_persistent_data = True             # the scene synced once: 0.6 s a render after the first, not 2.5
+    cam.data.ortho_scale = 2.0 * float(look["half_width"])
+    sphere = scene.objects["sphere"]
+    sphere.shadow_terminator_geometry_offset = 0.0      # an analytic sphere in Mitsuba: no terminator fix
+    sphere.rotation_euler = (math.pi / 2, 0.0, 0.0)     # its local axes Mitsuba's sphere's: the pole on Mitsuba's
+    #                                                     +z, the UV tangent (u along the azimuth) its dp/du
+    sun.data.angle = 2.0 * math.radians(float(look["lamp_deg"]))
+    sun.data.energy = float(look["irradiance"])
+    _look_at(sun, _blender_axes([0.0, 0.0, 1.0]), up=np.array([0.0, 0.0, 1.0]))
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    env = nodes.new("ShaderNodeTexEnvironment")
+    env.image, env.interpolation, env.projection = _env_image(look), "Linear", "EQUIRECTANGULAR"
+    links.new(env.outputs["Color"], nodes["Background"].inputs["Color"])
+    world.cycles.sampling_method = "MANUAL"             # importance map at the map's size, built once
+    world.cycles.sample_map_resolution = int(look["env_width"])   # (AUTOMATIC: about 2 s a render)
+    return scene, cam, sun, world
+
+
+def _looks(job, mat):
+    scene, cam, sun, world = _looks_scene(job, mat)
+    look = job["looks"]
+    for k, r in enumerate(job["renders"]):
+        a = math.radians(float(r["angle"]))
+        _look_at(cam, _blender_axes([math.sin(a), 0.0, math.cos(a)]), up=np.array([0.0, 0.0, 1.0]))
+        light = r["kind"] == "look_light"
+        sun.hide_render = not light
+        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0 if light else 1.0
+        scene.cycles.samples = int(look["light_spp"]) if light else int(job["spp"])
+        scene.cycles.seed = int(job.get("seed", 0)) + k
+        np.save(os.path.join(job["out"], f"render_{k}.npy"),
+                _render(scene, os.path.join(job["out"], f"render_{k}.exr")))
+
+
 def main(job_path):
     with open(job_path) as fh:
         job = json.load(fh)
@@ -212,6 +287,8 @@ def main(job_path):
     if job["material"].get("untextured"):
         _untextured(mat)
     mat.use_fake_user = True
+    if job.get("looks"):
+        return _looks(job, mat)
     scene, cam, sun, world = _scene(job, mat)
     for k, r in enumerate(job["renders"]):
         _look_at(cam, r["camera"])
