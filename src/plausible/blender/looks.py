@@ -20,7 +20,7 @@ The comparison's floor is measured on a material known exactly on both sides (Cy
 Diffuse BSDF against Mitsuba's ``diffuse``, f = rd / pi; docs/blender.md):
 :func:`check_looks` passes a pair whose FLIP is at most :data:`FLIP_TOL` and whose highlight
 ratios are within the band, and fails otherwise (a deliberately wrong material fails:
-tests/blender/test_looks.py).
+tests/blender/test_cycles_looks.py).
 
 References: Andersson et al., "FLIP: A Difference Evaluator for Alternating Images", 2020,
 and "Visualizing Errors in Rendered High Dynamic Range Images", 2021 (HDR-FLIP); Blender
