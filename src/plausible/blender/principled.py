@@ -139,7 +139,9 @@ def blender_material(params: dict, nodes: str = "gltf", source=None) -> dict:
     out = principled_inputs(params)
     metallic, spec = float(params.get("metallic", 1.0)), float(params.get("specular", 1.0))
     if nodes == "gltf" and metallic < 1.0 and spec > 0.0 and float(params.get("anisotropy_strength", 0.0)) == 0.0:
-        f0 = np.minimum(0.04 * np.asarray(_rgb(params.get("specular_color", 1.0))), 1.0) * spec
+        from ..models.gltf_pbr import dielectric_f0
+
+        f0 = dielectric_f0(np, spec, np.asarray(_rgb(params.get("specular_color", 1.0))))
         base = np.asarray(_rgb(params.get("base_color", 1.0)))
         out["gltf_nodes"] = {"base_color": base.tolist(), "metallic": metallic,
                              "roughness": float(params.get("roughness", 1.0)), "specular": spec,
