@@ -173,9 +173,12 @@ def test_an_mtl_plastic_written_as_its_own_lobes_renders_like_its_source(blender
 
 
 @pytest.mark.slow
-def test_convert_to_blender_table_names_what_was_written(blender, tmp_path):
+def test_convert_to_blender_table_names_what_was_written(blender, tmp_path, monkeypatch):
     # the CLI's table (not --json): an MTL plastic written as its own lobes, verified in Cycles (about 40 s)
     (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+    import plausible.cli
+
+    monkeypatch.setattr(plausible.cli.console, "width", 250)   # one line a row whatever the runner's terminal
     r = CliRunner().invoke(main, ["convert", str(tmp_path / "p.mtl"), "--to", "blender", "--out",
                                   str(tmp_path / "p.py")], catch_exceptions=False)
     assert r.exit_code == 0, r.output
