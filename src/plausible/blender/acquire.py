@@ -122,6 +122,9 @@ class Acquisition:
     angles: tuple
     seconds: float
     notes: list = field(default_factory=list)
+    #: whether the directions are in a known tangent frame (:mod:`.tangent`), so that an
+    #: anisotropic material's swapped pairs are read at the same frame (a class attribute)
+    tangent_frame = False
 
     def brdf(self) -> merl.MerlBRDF:
         """The measured pairs as a MERL table (nearest measured pair per cell): the model
@@ -295,10 +298,11 @@ def _reciprocity(acq: Acquisition, tol: float, isotropic: bool = True) -> Proper
     """Relative difference of f(wi, wo) and f(wo, wi) over the swapped pairs where f is
     at least 1e-3 of its largest value and the lobe is resolved (:data:`RESOLVED_SPREAD`);
     passes when the 95th percentile is <= ``tol``; a failure is unresolved when fewer than
-    :data:`MIN_RESOLVED` pairs are resolved, and so is an anisotropic material (the swapped reading
-    is at a normal whose tangent has turned)."""
+    :data:`MIN_RESOLVED` pairs are resolved, and so is an anisotropic material's of the isotropic
+    acquisition (the swapped reading is at a normal whose tangent has turned; the tangent-resolved
+    acquisition of :mod:`.tangent` turns the sphere with the world, and is checked)."""
     fa, fb = acq.f_ab.mean(1), acq.f_ba.mean(1)
-    if not isotropic:
+    if not isotropic and not acq.tangent_frame:
         return PropertyResult("reciprocity", False, math.nan, "unresolved: an anisotropic material's tangent "
                               "turns with the sphere, so the swapped pair is not read at the same frame", {},
                               {}, unresolved=True)
@@ -333,9 +337,13 @@ def _energy(acq: Acquisition, tol: float) -> PropertyResult:
     top = float(acq.albedo[i, c])
     worst = dict(theta_deg=float(np.degrees(acq.albedo_theta[i])), channel="rgb"[c], albedo=top,
                  stderr=float(acq.albedo_stderr[i, c]))
+    cells = f"{len(acq.albedo_theta)} rings of {RING_DEG:g} deg"
+    if acq.tangent_frame:       # cells of (theta_o, phi_o) in the tangent frame: the whole hemisphere
+        worst["phi_deg"] = float(np.degrees(acq.albedo_phi[i]))
+        cells = f"{len(acq.albedo_theta)} cells of (theta_o, phi_o) in the tangent frame"
     return PropertyResult("energy", bool(np.all(excess <= 0)), top,
-                          f"<= 1 + {tol:g} + 3 standard errors (white furnace, {len(acq.albedo_theta)} rings of "
-                          f"{RING_DEG:g} deg to {MAX_THETA_DEG:g} deg; largest stderr "
+                          f"<= 1 + {tol:g} + 3 standard errors (white furnace, {cells} "
+                          f"to {MAX_THETA_DEG:g} deg; largest stderr "
                           f"{float(acq.albedo_stderr.max()):.2g})", worst,
                           dict(albedo=acq.albedo.tolist(), stderr=acq.albedo_stderr.tolist(),
                                theta_deg=np.degrees(acq.albedo_theta).tolist()))
@@ -348,7 +356,8 @@ def check_acquisition(acq: Acquisition, *, reciprocity_tol: float = RECIPROCITY_
     :func:`acquire` measured; module docstring), as a :class:`CheckReport`.  The
     sampling and chi-square checks concern a sampler, which an acquisition does not
     have (Cycles samples its own BSDFs): reported not applicable.  ``isotropic=False``
-    (an anisotropic material): reciprocity is reported unresolved (module docstring)."""
+    (an anisotropic material): reciprocity is reported unresolved (module docstring), unless the
+    acquisition is tangent-resolved (:func:`.tangent.acquire_tangent`)."""
     from ..analysis.report import not_applicable
 
     rep = CheckReport(f"blender:{acq.name}", dict(resolution=acq.resolution, spp=acq.spp,
@@ -356,7 +365,8 @@ def check_acquisition(acq: Acquisition, *, reciprocity_tol: float = RECIPROCITY_
     rep.results = [_reciprocity(acq, reciprocity_tol, isotropic), _energy(acq, energy_tol),
                    not_applicable("sampling", "an acquisition measures values; Cycles keeps its sampler"),
                    not_applicable("chi2", "an acquisition measures values; Cycles keeps its sampler")]
-    rep.notes.append(f"acquired in Cycles ({len(acq.angles)} light angles x 2 and a white furnace, "
+    turns = f" x {len(acq.turns)} turns of a known tangent field" if acq.tangent_frame else ""
+    rep.notes.append(f"acquired in Cycles ({len(acq.angles)} light angles x 2{turns} and a white furnace, "
                      f"{acq.resolution} px, {acq.spp} spp, {acq.seconds:.1f} s); {len(acq.f)} measured pairs with "
                      f"theta_i, theta_o <= {MAX_THETA_DEG:g} deg")
     rep.notes += acq.notes
