@@ -843,8 +843,12 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
                    "- for standard output (that file's text with the text targets, else the .json's).")
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
+@click.option("--nodes", type=click.Choice(["source", "gltf", "principled"]), default=None, metavar="TREE",
+              help="With --to blender: the node tree written: source (default: a Lambertian plus Cook-Torrance "
+                   "source as its own lobes, any other as gltf), gltf (the glTF fit; a dielectric part as glTF's "
+                   "formula in nodes), principled (the glTF fit as one Principled BSDF). See docs/blender.md.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
-def convert_cmd(source, to, out, metric, as_json):
+def convert_cmd(source, to, out, metric, nodes, as_json):
     """Convert SOURCE's materials to TARGET, with the error measured (docs/convert.md).
 
     SOURCE: a model spec, material:NAME@FIT, a Mitsuba BSDF (.xml, or .json of dicts by name),
@@ -857,7 +861,9 @@ def convert_cmd(source, to, out, metric, as_json):
     if out == "-" and as_json:
         _fail("--out - and --json both write to standard output: give --out a file")
     if str(to).strip() == "blender":
-        return _convert_blender(source, out, metric, as_json)
+        return _convert_blender(source, out, metric, as_json, nodes or "source")
+    if nodes is not None:
+        _fail(f"--nodes chooses the node tree of --to blender; --to {to} writes no node tree: leave --nodes out")
     try:
         if out != "-":
             check_output(out, to)          # a bad --out is refused before minutes of fitting
@@ -877,15 +883,16 @@ def convert_cmd(source, to, out, metric, as_json):
         raise SystemExit(1)                # some materials skipped: the rest converted and written
 
 
-def _convert_blender(source, out, metric, as_json):
-    """convert --to blender: Principled BSDFs in a .blend or .py, each verified in Cycles."""
+def _convert_blender(source, out, metric, as_json, nodes="source"):
+    """convert --to blender: Principled BSDFs (or node trees, ``--nodes``) in a .blend or .py, each
+    verified in Cycles."""
     from .blender import BlenderUnavailable
     from .blender.convert import convert_to_blender
 
     try:
-        res = convert_to_blender(source, out, metric, progress=silent if as_json else _bar())
+        res = convert_to_blender(source, out, metric, nodes=nodes, progress=silent if as_json else _bar())
     except ValueError as e:
-        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))
+        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: ").replace("nodes: ", "--nodes: "))
     except BlenderUnavailable as e:
         _fail(str(e))
     if as_json:
