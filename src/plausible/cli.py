@@ -381,12 +381,15 @@ def eval_cmd(model, params, wi, wo, as_json):
 @click.option("--blender", "blend_file", type=click.Path(dir_okay=False), metavar="FILE.blend",
               help="Acquire a material of a Blender file in Cycles (--material NAME) and check it "
                    "(docs/blender.md).")
+@click.option("--tangent", is_flag=True,
+              help="With --blender: the tangent-resolved acquisition, for an anisotropic material (reciprocity "
+                   "at the same tangent frame, the albedo over theta and phi; 97 renders; docs/blender.md).")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
               help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
 @click.option("--scheduler", metavar="ADDRESS",
               help="With --materials: a running Dask scheduler (tcp://host:8786) instead of --jobs.")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
-          python_obj, all_materials, fit_keys, material_names, out_dir, blend_file, jobs, scheduler):
+          python_obj, all_materials, fit_keys, material_names, out_dir, blend_file, tangent, jobs, scheduler):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
@@ -411,7 +414,9 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     if blend_file is not None:
         return _check_blender(blend_file, material_names, quick, as_json,
                               model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj
-                              or all_materials or fit_keys or out_dir)
+                              or all_materials or fit_keys or out_dir, tangent)
+    if tangent:
+        _fail("--tangent chooses the acquisition of --blender FILE --material NAME; give --blender")
     if all_materials or fit_keys or material_names or out_dir or scheduler or (jobs and not all_models):
         return _check_materials(all_materials, fit_keys, material_names, out_dir, (jobs, scheduler), quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
@@ -455,18 +460,20 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     sys.exit(0 if all(verdicts) else 1)
 
 
-def _check_blender(blend_file, names, quick, as_json, other):
-    """check --blender FILE --material NAME: the material acquired in Cycles and checked."""
+def _check_blender(blend_file, names, quick, as_json, other, tangent=False):
+    """check --blender FILE --material NAME [--tangent]: the material acquired in Cycles and checked."""
     import json
 
     from .blender import BlenderUnavailable, check_material
 
     if other:
-        _fail("--blender checks one material of a .blend file; it takes only --material, --quick and --json")
+        _fail("--blender checks one material of a .blend file; it takes only --material, --tangent, --quick and "
+              "--json")
     if len(names) != 1:
         _fail(f"--blender needs exactly one --material NAME (the material in {blend_file}), got {len(names)}")
     try:
-        rep, _ = check_material(blend_file, names[0], quick=quick, progress=silent if as_json else _bar())
+        rep, _ = check_material(blend_file, names[0], quick=quick, tangent=tangent,
+                                progress=silent if as_json else _bar())
     except ValueError as e:
         _fail(str(e).replace("blend: ", "--blender: ").replace("material: ", "--material: "))
     except BlenderUnavailable as e:

@@ -113,3 +113,41 @@ class TestArguments:
     def test_a_tangent_resolved_acquisition_is_not_a_merl_table(self, diffuse):
         with pytest.raises(NotImplementedError, match="anisotropic"):
             diffuse.brdf()
+
+
+def test_the_uv_map_tangent_of_a_written_material_is_the_field_the_acquisition_assumes(blender, tmp_path):
+    # convert --to blender writes an anisotropic metal with a Tangent node of the UV map: the worker's
+    # sphere has u along the azimuth about its pole, the same field as Cycles' default radial tangent
+    from plausible.blender.principled import blender_material, write_blender
+
+    m = _ggx(math.pi / 4)
+    write_blender({"m": blender_material(m.params)}, tmp_path / "m.py")
+    acq = acquire_tangent(material_spec(script=str(tmp_path / "m.py")), spp=16, **dict(SMALL, turns=(0, 90)))
+    assert check_model(acq, m, tol=0.01).passed
+    assert not check_model(turned(acq, 45.0), m).passed
+
+
+class TestCheckCommand:
+    def test_check_blender_tangent_checks_an_anisotropic_materials_reciprocity(self, blender, tmp_path):
+        import json
+
+        from click.testing import CliRunner
+
+        from plausible.blender.principled import blender_material, write_blender
+        from plausible.cli import main
+
+        write_blender({"brushed": blender_material(_ggx(math.pi / 4).params)}, tmp_path / "b.blend")
+        r = CliRunner().invoke(main, ["check", "--blender", str(tmp_path / "b.blend"), "--material", "brushed",
+                                      "--tangent", "--quick", "--json"])
+        rep = json.loads(r.stdout)
+        assert r.exit_code == 0 and rep["passed"], r.output
+        recip = rep["results"][0]
+        assert recip["passed"] and recip["details"]["pairs"] >= 100
+
+    def test_tangent_without_blender_exits_2(self):
+        from click.testing import CliRunner
+
+        from plausible.cli import main
+
+        r = CliRunner().invoke(main, ["check", "lambertian", "--tangent"])
+        assert r.exit_code == 2 and "--tangent chooses the acquisition of --blender" in r.output
