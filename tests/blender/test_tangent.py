@@ -77,7 +77,7 @@ def test_a_quarter_turn_of_the_material_is_a_quarter_turn_of_the_frame(blender, 
 
 
 def test_reciprocity_of_an_anisotropic_ggx_is_checked_at_the_same_frame(eighth):
-    r = check_acquisition(eighth, isotropic=False)["reciprocity"]
+    r = check_acquisition(eighth)["reciprocity"]
     assert r.passed and not r.unresolved and r.details["pairs"] >= 100
 
 
@@ -90,7 +90,7 @@ def test_a_swapped_partner_at_another_tangent_fails_reciprocity(eighth):
             j = (i + 2) % len(eighth.turns)
             broken[2 + i * per_turn + 2 * k] = imgs[2 + j * per_turn + 2 * k]
     acq = _assemble("broken", broken, eighth.angles, eighth.turns, eighth.resolution, eighth.spp, 0.0)
-    r = check_acquisition(acq, isotropic=False)["reciprocity"]
+    r = check_acquisition(acq)["reciprocity"]
     assert not r.passed and not r.unresolved
 
 

@@ -37,7 +37,7 @@ def check_material(blend=None, material=None, *, principled=None, diffuse=None, 
 
         kw = dict(resolution=48, angles=(0, 40, 80), turns=(0, 45, 90, 135)) if quick else {}
         acq = acquire_tangent(spec, name=name, progress=progress, **kw)
-        return check_acquisition(acq, isotropic=False), acq
+        return check_acquisition(acq), acq
     kw = dict(resolution=48, angles=(0, 40, 80, 120, 160)) if quick else {}
     acq = acquire(spec, name=name, progress=progress, **kw)
     return check_acquisition(acq), acq

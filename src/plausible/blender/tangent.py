@@ -55,10 +55,11 @@ import numpy as np
 
 from ..analysis.checks import PropertyResult
 from . import runner
-from .acquire import MAX_THETA_DEG, RESOLUTION, SPP, Acquisition, _bilinear, _pixel_normals
+from .acquire import (MAX_THETA_DEG, RESOLUTION, SPP, Acquisition, _bilinear, _pixel_normals, pole_rotation,
+                      swapped_renders, turn_y)
 
 __all__ = ["ANGLES", "TURNS", "TangentAcquisition", "acquire_tangent", "check_isotropy", "check_model", "phi_table",
-           "turned"]
+           "pole_rotation", "turned"]
 
 #: Angles (degrees) between light and camera of the sun renders (fewer than the isotropic
 #: acquisition's: each is rendered at every turn).
@@ -72,21 +73,6 @@ RING_DEG = 5.0
 PHI_DEG = 45.0
 #: Fewest pixels of a furnace cell (fewer give no trustworthy standard error).
 MIN_CELL = 6
-
-
-def pole_rotation(beta_deg: float) -> np.ndarray:
-    """The sphere's rotation (world from object) putting its pole at ``(-sin b, cos b, 0)``:
-    a quarter turn about ``x`` (``z`` to ``y``), then ``b`` about ``z``."""
-    b = math.radians(beta_deg)
-    rz = np.array([[math.cos(b), -math.sin(b), 0.0], [math.sin(b), math.cos(b), 0.0], [0.0, 0.0, 1.0]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
-    return rz @ rx
-
-
-def _turn_y(a_rad: float) -> np.ndarray:
-    """``R``: the turn about ``y`` by ``-a`` (``R (sin a, 0, cos a) = z``)."""
-    c, s = math.cos(a_rad), math.sin(a_rad)
-    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
 
 
 def frames(n: np.ndarray, pole: np.ndarray, turn_deg: float = 0.0):
@@ -162,7 +148,7 @@ def _swapped(img_a, img_b, a_deg, normals, mask):
     cmin = math.cos(math.radians(MAX_THETA_DEG))
     keep = (n @ l > cmin) & (n[:, 2] > cmin)
     n, fa = n[keep], img_a[mask][keep] / (n[keep] @ l)[:, None]
-    rn = n @ _turn_y(a).T
+    rn = n @ turn_y(a).T
     fb, spread = _bilinear(img_b, rn[:, 0], rn[:, 1])
     fb = fb / n[:, 2][:, None]                                # (R n) . l' = n . z
     th = np.stack([np.arccos(np.clip(n @ l, -1, 1)), np.arccos(np.clip(n[:, 2], -1, 1)), spread], -1)
@@ -173,13 +159,7 @@ def _renders(angles, turns):
     """The job's renders: the furnace, then per turn and angle the render and its swapped partner."""
     out = [{"kind": "furnace", "camera": [0, 0, 1], "sphere": pole_rotation(0.0).tolist()}]
     for beta in turns:
-        q = pole_rotation(beta)
-        for a in angles:
-            r = math.radians(a)
-            out.append({"kind": "sun", "light": [math.sin(r), 0.0, math.cos(r)], "camera": [0, 0, 1],
-                        "sphere": q.tolist()})
-            out.append({"kind": "sun", "light": [-math.sin(r), 0.0, math.cos(r)], "camera": [0, 0, 1],
-                        "sphere": (_turn_y(r) @ q).tolist()})
+        out += swapped_renders(angles, pole_rotation(beta))
     return out
 
 
