@@ -110,6 +110,12 @@ class TestArguments:
         with pytest.raises(ValueError, match=name):
             acquire_tangent(material_spec(diffuse=0.5), **kw)
 
+    @pytest.mark.parametrize("check", [check_model, check_isotropy])
+    def test_a_tolerance_outside_0_1_is_refused(self, diffuse, check):
+        args = (diffuse, registry.make("lambertian", rd=RD)) if check is check_model else (diffuse,)
+        with pytest.raises(ValueError, match=r"tol must be in \(0, 1\)"):
+            check(*args, tol=1.5)
+
     def test_a_tangent_resolved_acquisition_is_not_a_merl_table(self, diffuse):
         with pytest.raises(NotImplementedError, match="anisotropic"):
             diffuse.brdf()
