@@ -55,8 +55,8 @@ import numpy as np
 
 from ..analysis.checks import PropertyResult
 from . import runner
-from .acquire import (MAX_THETA_DEG, RESOLUTION, SPP, Acquisition, _bilinear, _pixel_normals, pole_rotation,
-                      swapped_renders, turn_y)
+from .acquire import (MAX_THETA_DEG, RESOLUTION, SPP, Acquisition, _pixel_normals, _swapped, pole_rotation,
+                      swapped_renders)
 
 __all__ = ["ANGLES", "TURNS", "TangentAcquisition", "acquire_tangent", "check_isotropy", "check_model", "phi_table",
            "pole_rotation", "turned"]
@@ -138,21 +138,6 @@ def _furnace_cells(img, normals, mask, pole, turn_deg=0.0):
                 mid = math.nan if lo == 0.0 else math.radians(ph[cell].mean())
                 out.append((math.radians(th[cell].mean()), mid, s.mean(0), s.std(0, ddof=1) / math.sqrt(len(s))))
     return tuple(np.array([o[k] for o in out]) for k in range(4))
-
-
-def _swapped(img_a, img_b, a_deg, normals, mask):
-    """f(wi, wo) of a render and f(wo, wi) of its partner read at ``R n`` (module docstring)."""
-    a = math.radians(a_deg)
-    n = normals[mask]
-    l = np.array([math.sin(a), 0.0, math.cos(a)])
-    cmin = math.cos(math.radians(MAX_THETA_DEG))
-    keep = (n @ l > cmin) & (n[:, 2] > cmin)
-    n, fa = n[keep], img_a[mask][keep] / (n[keep] @ l)[:, None]
-    rn = n @ turn_y(a).T
-    fb, spread = _bilinear(img_b, rn[:, 0], rn[:, 1])
-    fb = fb / n[:, 2][:, None]                                # (R n) . l' = n . z
-    th = np.stack([np.arccos(np.clip(n @ l, -1, 1)), np.arccos(np.clip(n[:, 2], -1, 1)), spread], -1)
-    return fa, fb, th
 
 
 def _renders(angles, turns):
