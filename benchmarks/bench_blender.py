@@ -40,3 +40,15 @@ def test_cycles_looks(benchmark, spp):
                        kwargs=dict(spp=spp), rounds=2, iterations=1)
     record(benchmark, "blender", f"compare_looks' scene in Cycles, 4 views of 64 px, {spp} spp (lamp {16 * spp})",
            backend="cycles-cpu", op="looks", n=8)
+
+
+@pytest.mark.parametrize("res, angles, turns", [(48, (0, 40, 80), (0, 45, 90, 135)),
+                                                (96, (0, 20, 40, 60, 80, 100, 120, 140), (0, 30, 60, 90, 120, 150))])
+def test_acquire_tangent(benchmark, res, angles, turns):
+    from plausible.blender.tangent import acquire_tangent
+
+    aniso = dict(METAL, Anisotropic=0.6, distribution="GGX")
+    acq = benchmark.pedantic(acquire_tangent, args=(material_spec(principled=aniso),),
+                             kwargs=dict(resolution=res, angles=angles, turns=turns), rounds=2, iterations=1)
+    record(benchmark, "blender", f"tangent-resolved acquisition of an anisotropic metal, {res} px, "
+           f"{2 * len(angles) * len(turns) + 1} renders", backend="cycles-cpu", op="acquire", n=len(acq.f))

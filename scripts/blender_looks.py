@@ -2,7 +2,8 @@
 
     PYTHONPATH=src python scripts/blender_looks.py floor      # Diffuse vs diffuse: the comparison's floor
     PYTHONPATH=src python scripts/blender_looks.py mapping    # gltf-pbr vs its Principled BSDF, per variant
-    PYTHONPATH=src python scripts/blender_looks.py table [gltf|principled]   # convert --to blender, scored
+    PYTHONPATH=src python scripts/blender_looks.py table [source|gltf|principled] [ct|other]
+        # convert --to blender, scored (other: Ward and Ashikhmin-Shirley fits, through the glTF fit)
     PYTHONPATH=src python scripts/blender_looks.py mtlx       # convert --to materialx, MaterialX's validate()
 
 Prints a Markdown table per part (FLIP, per view, highlight ratios, seconds)."""
@@ -74,9 +75,12 @@ MTL = {"wood": "newmtl wood\nKd 0.6 0.4 0.2\nKs 0 0 0\nillum 1\n",
        "red_plastic": "newmtl red_plastic\nKd 0.5 0.1 0.1\nKs 0.04 0.04 0.04\nNs 200\nillum 2\n"}
 PUBLISHED = ("gold-metallic-paint@ngan2005/cook-torrance", "red-plastic@ngan2005/cook-torrance",
              "alum-bronze@ngan2005/cook-torrance")
+#: Sources no node tree writes as its own lobes: they go through the glTF fit (``table source other``).
+OTHER = tuple(f"{m}@ngan2005/{f}" for f in ("ward", "ashikhmin-shirley")
+              for m in ("gold-metallic-paint", "red-plastic", "alum-bronze"))
 
 
-def table(nodes="gltf"):
+def table(nodes="gltf", which="ct"):
     import tempfile
     from pathlib import Path
 
@@ -85,7 +89,7 @@ def table(nodes="gltf"):
     print("| source | written | albedo diff. source / fit | FLIP source / fit | highlight vs source (0/60/120/150) "
           "| FLIP glTF fit vs source (Mitsuba) | seconds |\n|---|---|---|---|---|---|---|")
     tmp = Path(tempfile.mkdtemp(prefix="c46-"))
-    for label, src in _sources(tmp):
+    for label, src in (_sources(tmp) if which == "ct" else [(p, f"material:{p}") for p in OTHER]):
         t = time.perf_counter()
         bc = convert_to_blender(src, tmp / "out.blend", nodes=nodes)
         v = bc.verified[0]

@@ -381,12 +381,15 @@ def eval_cmd(model, params, wi, wo, as_json):
 @click.option("--blender", "blend_file", type=click.Path(dir_okay=False), metavar="FILE.blend",
               help="Acquire a material of a Blender file in Cycles (--material NAME) and check it "
                    "(docs/blender.md).")
+@click.option("--tangent", is_flag=True,
+              help="With --blender: the tangent-resolved acquisition, for an anisotropic material (reciprocity "
+                   "at the same tangent frame, the albedo over theta and phi; 97 renders; docs/blender.md).")
 @click.option("--jobs", type=click.IntRange(1, 64), metavar="N",
               help="With --materials or --all: worker processes (default: the usable cores, at most 2).")
 @click.option("--scheduler", metavar="ADDRESS",
               help="With --materials: a running Dask scheduler (tcp://host:8786) instead of --jobs.")
 def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mitsuba_xml, bsdf_id,
-          python_obj, all_materials, fit_keys, material_names, out_dir, blend_file, jobs, scheduler):
+          python_obj, all_materials, fit_keys, material_names, out_dir, blend_file, tangent, jobs, scheduler):
     """Verify reciprocity, energy conservation, sampling consistency and chi-square.
 
     MODEL is a registered model; or check any BSDF with --mitsuba, --mitsuba-xml or
@@ -411,7 +414,9 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     if blend_file is not None:
         return _check_blender(blend_file, material_names, quick, as_json,
                               model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj
-                              or all_materials or fit_keys or out_dir)
+                              or all_materials or fit_keys or out_dir, tangent)
+    if tangent:
+        _fail("--tangent chooses the acquisition of --blender FILE --material NAME; give --blender")
     if all_materials or fit_keys or material_names or out_dir or scheduler or (jobs and not all_models):
         return _check_materials(all_materials, fit_keys, material_names, out_dir, (jobs, scheduler), quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
@@ -455,18 +460,20 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
     sys.exit(0 if all(verdicts) else 1)
 
 
-def _check_blender(blend_file, names, quick, as_json, other):
-    """check --blender FILE --material NAME: the material acquired in Cycles and checked."""
+def _check_blender(blend_file, names, quick, as_json, other, tangent=False):
+    """check --blender FILE --material NAME [--tangent]: the material acquired in Cycles and checked."""
     import json
 
     from .blender import BlenderUnavailable, check_material
 
     if other:
-        _fail("--blender checks one material of a .blend file; it takes only --material, --quick and --json")
+        _fail("--blender checks one material of a .blend file; it takes only --material, --tangent, --quick and "
+              "--json")
     if len(names) != 1:
         _fail(f"--blender needs exactly one --material NAME (the material in {blend_file}), got {len(names)}")
     try:
-        rep, _ = check_material(blend_file, names[0], quick=quick, progress=silent if as_json else _bar())
+        rep, _ = check_material(blend_file, names[0], quick=quick, tangent=tangent,
+                                progress=silent if as_json else _bar())
     except ValueError as e:
         _fail(str(e).replace("blend: ", "--blender: ").replace("material: ", "--material: "))
     except BlenderUnavailable as e:
@@ -843,8 +850,12 @@ def fit_cmd(model, target, params, metric, out, starts, time_limit, seed):
                    "- for standard output (that file's text with the text targets, else the .json's).")
 @click.option("--metric", type=click.Choice(["perceptual", "l2-cos", "log"]), default="perceptual",
               show_default=True, help="Error metric minimised (see docs/fitting.md).")
+@click.option("--nodes", type=click.Choice(["source", "gltf", "principled"]), default=None, metavar="TREE",
+              help="With --to blender: the node tree written: source (default: a Lambertian plus Cook-Torrance "
+                   "source as its own lobes, any other as gltf), gltf (the glTF fit; a dielectric part as glTF's "
+                   "formula in nodes), principled (the glTF fit as one Principled BSDF). See docs/blender.md.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report of every material as JSON.")
-def convert_cmd(source, to, out, metric, as_json):
+def convert_cmd(source, to, out, metric, nodes, as_json):
     """Convert SOURCE's materials to TARGET, with the error measured (docs/convert.md).
 
     SOURCE: a model spec, material:NAME@FIT, a Mitsuba BSDF (.xml, or .json of dicts by name),
@@ -857,7 +868,9 @@ def convert_cmd(source, to, out, metric, as_json):
     if out == "-" and as_json:
         _fail("--out - and --json both write to standard output: give --out a file")
     if str(to).strip() == "blender":
-        return _convert_blender(source, out, metric, as_json)
+        return _convert_blender(source, out, metric, as_json, nodes or "source")
+    if nodes is not None:
+        _fail(f"--nodes chooses the node tree of --to blender; --to {to} writes no node tree: leave --nodes out")
     try:
         if out != "-":
             check_output(out, to)          # a bad --out is refused before minutes of fitting
@@ -877,15 +890,16 @@ def convert_cmd(source, to, out, metric, as_json):
         raise SystemExit(1)                # some materials skipped: the rest converted and written
 
 
-def _convert_blender(source, out, metric, as_json):
-    """convert --to blender: Principled BSDFs in a .blend or .py, each verified in Cycles."""
+def _convert_blender(source, out, metric, as_json, nodes="source"):
+    """convert --to blender: Principled BSDFs (or node trees, ``--nodes``) in a .blend or .py, each
+    verified in Cycles."""
     from .blender import BlenderUnavailable
     from .blender.convert import convert_to_blender
 
     try:
-        res = convert_to_blender(source, out, metric, progress=silent if as_json else _bar())
+        res = convert_to_blender(source, out, metric, nodes=nodes, progress=silent if as_json else _bar())
     except ValueError as e:
-        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: "))
+        _fail(str(e).replace("to: ", "--to: ").replace("out: ", "--out: ").replace("nodes: ", "--nodes: "))
     except BlenderUnavailable as e:
         _fail(str(e))
     if as_json:

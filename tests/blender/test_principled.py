@@ -214,3 +214,55 @@ def test_an_anisotropic_metal_passes_the_look_check_at_64_spp(blender, tmp_path)
     from plausible.blender.looks import check_looks
 
     assert check_looks(_aniso(tmp_path, 0.0, 64)).passed
+
+
+class TestNodesOption:
+    """``convert --to blender --nodes TREE`` (the Python keyword ``nodes=``), docs/blender.md."""
+
+    def test_the_choices_are_the_writers(self):
+        from plausible.blender.principled import NODES
+
+        opt = next(p for p in main.commands["convert"].params if p.name == "nodes")
+        assert tuple(opt.type.choices) == NODES
+
+    def test_a_bad_tree_exits_2_naming_the_option_and_the_choices(self, tmp_path):
+        (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+        r = CliRunner().invoke(main, ["convert", str(tmp_path / "p.mtl"), "--to", "blender", "--nodes", "lobes",
+                                      "--out", str(tmp_path / "p.py")])
+        assert r.exit_code == 2
+        assert "--nodes" in r.output and "'lobes' is not one of 'source', 'gltf', 'principled'" in r.output
+
+    def test_nodes_with_another_target_exits_2(self, tmp_path):
+        (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+        r = CliRunner().invoke(main, ["convert", str(tmp_path / "p.mtl"), "--to", "gltf", "--nodes", "gltf",
+                                      "--out", str(tmp_path / "p.gltf")])
+        assert r.exit_code == 2 and "--nodes chooses the node tree of --to blender" in r.output
+
+    @pytest.mark.parametrize("given, passed", [([], "source"), (["--nodes", "principled"], "principled")])
+    def test_the_choice_reaches_the_writer(self, tmp_path, monkeypatch, given, passed):
+        import plausible.blender.convert as bc
+
+        seen = {}
+
+        def fake(source, out, metric, *, nodes, progress):
+            seen["nodes"] = nodes
+            raise ValueError("out: stop here")
+
+        monkeypatch.setattr(bc, "convert_to_blender", fake)
+        r = CliRunner().invoke(main, ["convert", "lambertian", "--to", "blender", "--out", str(tmp_path / "m.py"),
+                                      *given])
+        assert r.exit_code == 2 and "--out: stop here" in r.output and seen == {"nodes": passed}
+
+
+@pytest.mark.slow
+def test_convert_nodes_principled_writes_the_gltf_fit_not_the_sources_lobes(blender, tmp_path):
+    # the MTL plastic (a Lambertian + Blinn lobe) written as one Principled BSDF of its glTF fit (about 40 s)
+    import json
+
+    (tmp_path / "p.mtl").write_text(RED_PLASTIC)
+    r = CliRunner().invoke(main, ["convert", str(tmp_path / "p.mtl"), "--to", "blender", "--nodes", "principled",
+                                  "--out", str(tmp_path / "p.py"), "--json"], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    v = json.loads(r.stdout)[0]
+    assert "ct_nodes" not in v["blender"]["inputs"] and "gltf_nodes" not in v["blender"]["inputs"]
+    assert v["blender"]["inputs"]["Metallic"] == pytest.approx(v["params"]["metallic"])

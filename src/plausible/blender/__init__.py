@@ -24,13 +24,20 @@ __all__ = ["ANGLES", "Acquisition", "BlenderUnavailable", "acquire", "blender_py
 
 
 def check_material(blend=None, material=None, *, principled=None, diffuse=None, script=None, quick=False,
-                   progress=None):
+                   tangent=False, progress=None):
     """``plausible check`` of a Cycles material: a material ``material`` of the ``.blend``
     file ``blend`` (or a dict of Principled BSDF inputs, a Diffuse colour, a node script;
-    :func:`material_spec`), acquired (:func:`acquire`; ``quick``: 48 px, 5 angles) and
-    checked (:func:`check_acquisition`).  Returns ``(report, acquisition)``."""
+    :func:`material_spec`), acquired (:func:`acquire`; ``quick``: 48 px, 5 angles; ``tangent``:
+    :func:`.tangent.acquire_tangent`, for an anisotropic material, ``quick`` 48 px, 3 angles x 4
+    turns) and checked (:func:`check_acquisition`).  Returns ``(report, acquisition)``."""
     spec = material_spec(blend, material, principled=principled, diffuse=diffuse, script=script)
     name = material or ("principled" if principled is not None else "diffuse" if diffuse is not None else "script")
+    if tangent:
+        from .tangent import acquire_tangent
+
+        kw = dict(resolution=48, angles=(0, 40, 80), turns=(0, 45, 90, 135)) if quick else {}
+        acq = acquire_tangent(spec, name=name, progress=progress, **kw)
+        return check_acquisition(acq), acq
     kw = dict(resolution=48, angles=(0, 40, 80, 120, 160)) if quick else {}
     acq = acquire(spec, name=name, progress=progress, **kw)
     return check_acquisition(acq), acq

@@ -17,7 +17,10 @@ Geometry (Matusik et al. 2003, "A data-driven reflectance model", done in Cycles
 * **reciprocity** from swapped light and camera: the render at ``-a`` is the
   render at ``a`` with light and camera exchanged and the world turned by ``a``
   about ``y`` (``R``): the pixel at ``R n`` of it sees ``f(wo, wi)`` of the pixel
-  at ``n`` (read bilinearly between pixel centres);
+  at ``n`` (read bilinearly between pixel centres).  The sphere turns with the
+  world (its pole on ``y`` in the render at ``a``, turned by ``R`` in its partner),
+  so its tangent field does too, and an anisotropic material's swapped pair is at
+  the same tangent frame (:mod:`.tangent`);
 * **energy** from a **white furnace**: no lamp, a uniform world of radiance 1;
   a pixel's radiance is the directional albedo ``a(wo) = int f(w, wo) cos dw``
   at ``theta_o = acos(n_z)`` (a convex sphere sees only the world), averaged over
@@ -122,11 +125,43 @@ class Acquisition:
     angles: tuple
     seconds: float
     notes: list = field(default_factory=list)
+    #: whether the directions are in a known tangent frame (:mod:`.tangent`; a class attribute)
+    tangent_frame = False
 
     def brdf(self) -> merl.MerlBRDF:
         """The measured pairs as a MERL table (nearest measured pair per cell): the model
         contract, for ``check``, ``fit``, ``convert`` and the figures."""
         return merl.MerlBRDF(_fill_table(self.wi, self.wo, self.f), source=f"blender:{self.name}")
+
+
+def pole_rotation(beta_deg: float = 0.0) -> np.ndarray:
+    """The sphere's rotation (world from object) putting its pole (object ``z``, about which
+    Cycles' default tangent turns) at ``(-sin b, cos b, 0)``, in the image plane: a quarter turn
+    about ``x`` (``z`` to ``y``), then ``b`` about ``z``."""
+    b = math.radians(beta_deg)
+    rz = np.array([[math.cos(b), -math.sin(b), 0.0], [math.sin(b), math.cos(b), 0.0], [0.0, 0.0, 1.0]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+    return rz @ rx
+
+
+def turn_y(a_rad: float) -> np.ndarray:
+    """``R``: the turn about ``y`` by ``-a`` (``R (sin a, 0, cos a) = z``, ``R z = (-sin a, 0, cos a)``)."""
+    c, s = math.cos(a_rad), math.sin(a_rad)
+    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+
+
+def swapped_renders(angles, sphere: np.ndarray) -> list:
+    """Per angle ``a`` of ``angles`` (degrees) the sun render (light at ``a`` in the ``xz`` plane, the
+    sphere turned by ``sphere``) and its partner (light at ``-a``, the sphere turned by ``R sphere``:
+    the sphere, and its tangent field, turn with the world; module docstring)."""
+    out = []
+    for a in angles:
+        r = math.radians(a)
+        out.append({"kind": "sun", "light": [math.sin(r), 0.0, math.cos(r)], "camera": [0, 0, 1],
+                    "sphere": sphere.tolist()})
+        out.append({"kind": "sun", "light": [-math.sin(r), 0.0, math.cos(r)], "camera": [0, 0, 1],
+                    "sphere": (turn_y(r) @ sphere).tolist()})
+    return out
 
 
 def _pixel_normals(res: int):
@@ -198,8 +233,8 @@ def _swapped(img_a, img_b, a_deg, normals, mask):
     cmin = math.cos(math.radians(MAX_THETA_DEG))
     keep = (n @ l > cmin) & (n[:, 2] > cmin)
     n, fa = n[keep], img_a[mask][keep] / (n[keep] @ l)[:, None]
-    rx = n[:, 0] * math.cos(a) - n[:, 2] * math.sin(a)       # R n: R turns l onto z
-    fb, spread = _bilinear(img_b, rx, n[:, 1])
+    rn = n @ turn_y(a).T                                      # R n: R turns l onto z
+    fb, spread = _bilinear(img_b, rn[:, 0], rn[:, 1])
     fb = fb / n[:, 2][:, None]                                # (R n) . l_b = n . z
     th = np.stack([np.arccos(np.clip(n @ l, -1, 1)), np.arccos(np.clip(n[:, 2], -1, 1)), spread], -1)
     return fa, fb, th
@@ -237,11 +272,8 @@ def acquire(spec: dict, *, name: str = "material", angles=ANGLES, resolution: in
     angles = tuple(float(a) for a in angles)
     if not angles or not all(0.0 <= a <= 175.0 for a in angles):
         raise ValueError(f"angles must be degrees in [0, 175], got {angles!r}")
-    renders = [{"kind": "furnace", "camera": [0, 0, 1]}]
-    for a in angles:
-        for s in (1.0, -1.0):
-            r = math.radians(s * a)
-            renders.append({"kind": "sun", "light": [math.sin(r), 0.0, math.cos(r)], "camera": [0, 0, 1]})
+    renders = [{"kind": "furnace", "camera": [0, 0, 1], "sphere": pole_rotation().tolist()}]
+    renders += swapped_renders(angles, pole_rotation())
     from ..progress import start
 
     tick = start(progress, 1, f"acquire {name} in Cycles ({len(renders)} renders)")
@@ -291,17 +323,13 @@ RESOLVED_SPREAD = 0.005
 MIN_RESOLVED = 100
 
 
-def _reciprocity(acq: Acquisition, tol: float, isotropic: bool = True) -> PropertyResult:
+def _reciprocity(acq: Acquisition, tol: float) -> PropertyResult:
     """Relative difference of f(wi, wo) and f(wo, wi) over the swapped pairs where f is
     at least 1e-3 of its largest value and the lobe is resolved (:data:`RESOLVED_SPREAD`);
     passes when the 95th percentile is <= ``tol``; a failure is unresolved when fewer than
-    :data:`MIN_RESOLVED` pairs are resolved, and so is an anisotropic material (the swapped reading
-    is at a normal whose tangent has turned)."""
+    :data:`MIN_RESOLVED` pairs are resolved.  The swapped pair is at the same tangent frame
+    (the sphere turns with the world), so an anisotropic material is checked as an isotropic one."""
     fa, fb = acq.f_ab.mean(1), acq.f_ba.mean(1)
-    if not isotropic:
-        return PropertyResult("reciprocity", False, math.nan, "unresolved: an anisotropic material's tangent "
-                              "turns with the sphere, so the swapped pair is not read at the same frame", {},
-                              {}, unresolved=True)
     big = np.maximum(fa, fb) > 1e-3 * max(float(np.max(np.maximum(fa, fb), initial=0.0)), 1e-300)
     ok = big & (acq.recip_thetas[:, 2] <= RESOLVED_SPREAD)
     rel = np.abs(fa - fb)[ok] / (0.5 * (fa + fb)[ok])
@@ -333,30 +361,36 @@ def _energy(acq: Acquisition, tol: float) -> PropertyResult:
     top = float(acq.albedo[i, c])
     worst = dict(theta_deg=float(np.degrees(acq.albedo_theta[i])), channel="rgb"[c], albedo=top,
                  stderr=float(acq.albedo_stderr[i, c]))
+    cells = f"{len(acq.albedo_theta)} rings of {RING_DEG:g} deg"
+    if acq.tangent_frame:       # cells of (theta_o, phi_o) in the tangent frame: the whole hemisphere
+        worst["phi_deg"] = float(np.degrees(acq.albedo_phi[i]))
+        cells = f"{len(acq.albedo_theta)} cells of (theta_o, phi_o) in the tangent frame"
     return PropertyResult("energy", bool(np.all(excess <= 0)), top,
-                          f"<= 1 + {tol:g} + 3 standard errors (white furnace, {len(acq.albedo_theta)} rings of "
-                          f"{RING_DEG:g} deg to {MAX_THETA_DEG:g} deg; largest stderr "
+                          f"<= 1 + {tol:g} + 3 standard errors (white furnace, {cells} "
+                          f"to {MAX_THETA_DEG:g} deg; largest stderr "
                           f"{float(acq.albedo_stderr.max()):.2g})", worst,
                           dict(albedo=acq.albedo.tolist(), stderr=acq.albedo_stderr.tolist(),
                                theta_deg=np.degrees(acq.albedo_theta).tolist()))
 
 
 def check_acquisition(acq: Acquisition, *, reciprocity_tol: float = RECIPROCITY_TOL,
-                      energy_tol: float = ENERGY_TOL, isotropic: bool = True) -> CheckReport:
+                      energy_tol: float = ENERGY_TOL) -> CheckReport:
     """``plausible check`` of an acquired Cycles material: reciprocity from swapped light
     and camera, energy from the white furnace's albedo, angle by angle (what
     :func:`acquire` measured; module docstring), as a :class:`CheckReport`.  The
     sampling and chi-square checks concern a sampler, which an acquisition does not
-    have (Cycles samples its own BSDFs): reported not applicable.  ``isotropic=False``
-    (an anisotropic material): reciprocity is reported unresolved (module docstring)."""
+    have (Cycles samples its own BSDFs): reported not applicable.  An anisotropic material's
+    reciprocity is checked (the swapped pair at the same tangent frame); its energy is a ring
+    average here, over every ``(theta_o, phi_o)`` cell from :func:`.tangent.acquire_tangent`."""
     from ..analysis.report import not_applicable
 
     rep = CheckReport(f"blender:{acq.name}", dict(resolution=acq.resolution, spp=acq.spp,
                                                    angles_deg=list(acq.angles)))
-    rep.results = [_reciprocity(acq, reciprocity_tol, isotropic), _energy(acq, energy_tol),
+    rep.results = [_reciprocity(acq, reciprocity_tol), _energy(acq, energy_tol),
                    not_applicable("sampling", "an acquisition measures values; Cycles keeps its sampler"),
                    not_applicable("chi2", "an acquisition measures values; Cycles keeps its sampler")]
-    rep.notes.append(f"acquired in Cycles ({len(acq.angles)} light angles x 2 and a white furnace, "
+    turns = f" x {len(acq.turns)} turns of a known tangent field" if acq.tangent_frame else ""
+    rep.notes.append(f"acquired in Cycles ({len(acq.angles)} light angles x 2{turns} and a white furnace, "
                      f"{acq.resolution} px, {acq.spp} spp, {acq.seconds:.1f} s); {len(acq.f)} measured pairs with "
                      f"theta_i, theta_o <= {MAX_THETA_DEG:g} deg")
     rep.notes += acq.notes

@@ -24,7 +24,8 @@ plausible.  Usage::
 
 Each ``RENDER`` is ``{"kind": "sun", "light": [x, y, z], "camera": [x, y, z]}``
 (world directions, unit, pointing away from the sphere; sun irradiance 1 W/m^2
-perpendicular to its rays) or ``{"kind": "furnace", "camera": [x, y, z]}`` (a
+perpendicular to its rays; an optional ``"sphere": 3 x 3`` turns the sphere, world from
+object, and with it its tangent field) or ``{"kind": "furnace", "camera": [x, y, z]}`` (a
 uniform white world of radiance 1, no lamp).  The scene: a unit sphere at the
 origin (a smooth UV sphere of 512 x 256 faces), an orthographic camera of
 ``ortho_scale`` 2.2 looking at it along ``-camera``, a black world (sun renders),
@@ -199,6 +200,15 @@ def _scene(job, mat):
     return scene, cam, sun, world
 
 
+def _turn(sphere, rotation):
+    """The sphere turned by ``rotation`` (3 x 3, world from object; None: not turned).  The
+    sphere is the same, its default tangent (Cycles' radial tangent about the object's ``z``,
+    and the UV map's ``dp/du``) turns with it: ``t = Q z x n`` at the normal ``n``."""
+    from mathutils import Matrix
+    q = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float)
+    sphere.matrix_world = Matrix([list(q[0]) + [0.0], list(q[1]) + [0.0], list(q[2]) + [0.0], [0, 0, 0, 1]])
+
+
 def _world(world, strength):
     bg = world.node_tree.nodes["Background"]
     bg.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
@@ -290,7 +300,9 @@ def main(job_path):
     if job.get("looks"):
         return _looks(job, mat)
     scene, cam, sun, world = _scene(job, mat)
+    sphere = scene.objects["sphere"]
     for k, r in enumerate(job["renders"]):
+        _turn(sphere, r.get("sphere"))
         _look_at(cam, r["camera"])
         furnace = r["kind"] == "furnace"
         sun.hide_render = furnace
