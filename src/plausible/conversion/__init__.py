@@ -635,9 +635,9 @@ def _choose(src, metric, probe, target, src_alb, notes):
     if r.key in CM.BAND_FAMILIES and others:
         # kept only where the band needs it or the metric's own figure is lower too
         o = min(others, key=lambda x: x.figure)
-        if o.band <= CM.BAND_KEEP and o.errors[metric] <= r.errors[metric]:
-            tried += (f"; {o.key} kept: within the band and of the lower {metric} figure "
-                      f"({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
+        if o.band <= CM.BAND_KEEP and o.errors[metric] <= (1.0 + CM.BAND_KEEP_MARGIN) * r.errors[metric]:
+            tried += (f"; {o.key} kept: within the band and of a {metric} figure at most "
+                      f"{CM.BAND_KEEP_MARGIN:.0%} higher ({o.errors[metric]:.3g} against {r.errors[metric]:.3g})")
             r = o
     notes.append(f"mitsuba:{r.key} chosen: {why}; figure minimised (the albedo band as a constraint, within "
                  f"{CM.BAND_HARD} at 0/45/75 deg where a family can, the highlight held second): {tried}")

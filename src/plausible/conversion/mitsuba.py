@@ -36,8 +36,10 @@ NumPy.  The steps (:func:`fit_family`):
    ``(a - A)/A`` (the albedo rows weighted so that both sets count alike: a
    linearisation of the perceptual metric), scored by the true figure of the
    chosen metric (:func:`plausible.fitting.metrics.errors`).
-3. **Refine** each axis in turn by bounded Brent search between the best grid
-   point's neighbours (log scale for roughnesses), 8 evaluations each.
+3. **Refine** the axes from the best grid point by the fitter's optimiser
+   (:func:`plausible.fitting.fit.optimise`, least squares with a difference Jacobian) on
+   the colours' residuals at each point's best colours (:class:`AxesObjective`: a
+   variable projection), the best point by the true figure kept.
 4. **Polish** the colours of each channel on the true metric (L-BFGS-B on the
    smooth bound at beta = 20, 200, 2000, then Nelder-Mead), kept if better.
 5. **Measure** the result as loaded from its dict: every metric through Mitsuba
@@ -250,7 +252,11 @@ class Probe:
 
     def measure_all(self, bxdf):
         """:meth:`measure` and ``f`` at the strip's pairs (S, C) (one ``eval`` over all of them)."""
-        f = np.asarray(bxdf.eval(self.all_wi, self.all_wo), float)
+        return self.reduce(bxdf.eval(self.all_wi, self.all_wo))
+
+    def reduce(self, f):
+        """:meth:`measure_all` of the values ``f`` (N, C) at :attr:`all_wi`, :attr:`all_wo`."""
+        f = np.asarray(f, float)
         f = f.reshape(len(f), -1)
         n = len(self.wi)
         fcos = f[:n] * self.wo[:, 2:3]
@@ -314,20 +320,23 @@ def _basis_now(probe: Probe, family: Family, point: dict):
             sub = {k[len(prefix) + 1:]: v for k, v in point.items() if k.startswith(prefix + ".")}
             parts.append([scale * B for B in basis(probe, part, sub)])
         return tuple(np.concatenate([[a[0] + b[0]], a[1:], b[1:]]) for a, b in zip(*parts))
-    zero = {s: 0.0 for s in family.slots}
     ch = slice(None) if family.tint else 0           # a tinted family's channels differ: all three kept
-    F0 = A0 = H0 = 0.0
-    if family.offset:
-        F0, A0, H0 = probe.measure_all(_load(family.bsdf_dict(point, zero)))
-        F0, A0, H0 = F0[:, ch], A0[:, ch], H0[:, ch]
+    if family.type == "gltf-pbr":
+        raw = [probe.reduce(B) for B in _gltf_bases(probe, family, point)]
+    else:
+        zero = {s: 0.0 for s in family.slots}
+        raw = [probe.measure_all(_load(family.bsdf_dict(point, zero)))] if family.offset else []
+        raw += [tuple(v - v0 for v, v0 in zip(probe.measure_all(_load(family.bsdf_dict(point, {**zero, s: 1.0}))),
+                                               raw[0] if raw else (0.0, 0.0, 0.0))) for s in family.slots]
+    if not family.offset:
+        raw = [(0.0, 0.0, 0.0)] + raw
     c = (3,) if family.tint else ()
-    Fs, As, Hs = ([np.zeros((n,) + c) + B] for n, B in ((len(probe.wi), F0), (len(probe.thetas), A0),
-                                                        (len(probe.strip.wi), H0)))
-    for s in family.slots:
-        F, A, H = probe.measure_all(_load(family.bsdf_dict(point, {**zero, s: 1.0})))
-        Fs.append(np.broadcast_to(F[:, ch], Fs[0].shape) - F0)
-        As.append(np.broadcast_to(A[:, ch], As[0].shape) - A0)
-        Hs.append(np.broadcast_to(H[:, ch], Hs[0].shape) - H0)
+    Fs, As, Hs = ([np.zeros((n,) + c) + (B[:, ch] if np.ndim(B) else B)]
+                  for n, B in zip((len(probe.wi), len(probe.thetas), len(probe.strip.wi)), raw[0]))
+    for F, A, H in raw[1:]:
+        Fs.append(np.broadcast_to(F[:, ch], Fs[0].shape))
+        As.append(np.broadcast_to(A[:, ch], As[0].shape))
+        Hs.append(np.broadcast_to(H[:, ch], Hs[0].shape))
     # the strip's values as its images (linear in f): a blend's, a candidate's images are sums of these
     Hs = np.array(Hs)                                                  # (1 + J, S[, C])
     flat = np.moveaxis(Hs, 0, -1).reshape(len(Hs[0]), -1)              # (S, [C x] (1 + J))
@@ -342,6 +351,60 @@ def basis(probe: Probe, family: Family, point: dict):
     """The bases of ``family`` at ``point`` on ``probe`` (cached)."""
     _PROBES.setdefault(probe.key, probe)
     return _basis_cached(probe.key, family, tuple(sorted(point.items())))
+
+
+def _gltf_eval(probe, roughness, **kw):
+    """The registered ``gltf-pbr``'s values (N, 3) on the probe's pairs."""
+    from .. import registry
+
+    f = np.asarray(registry.make("gltf-pbr", roughness=roughness, **kw).eval(probe.all_wi, probe.all_wo), float)
+    return np.broadcast_to(f.reshape(len(f), -1), (len(f), 3))
+
+
+@lru_cache(maxsize=256)
+def _gltf_parts(probe_key, roughness: float):
+    """``(S, SW, P, WP)`` of ``gltf-pbr`` at ``roughness`` on the probe's pairs, each an evaluation of the
+    registered model read channel by channel: ``S = Vis D`` and ``SW = Vis D w`` (metallic 1, base colour
+    (1, 0, 0): channels 0 and 1; ``w`` the Fresnel weight ``(1 - V.H)^5``), and, the same at every roughness
+    (:func:`_gltf_diffuse_parts`), ``P = 1/pi`` above the horizon and ``WP = w P``.  Every glTF material of
+    that roughness is a combination of these (:func:`_gltf_bases`): one evaluation per roughness."""
+    probe = _PROBES[probe_key]
+    f = _gltf_eval(probe, roughness, metallic=1.0, base_color=[1.0, 0.0, 0.0])
+    return (f[:, 0], f[:, 1]) + _gltf_diffuse_parts(probe_key)
+
+
+@lru_cache(maxsize=16)
+def _gltf_diffuse_parts(probe_key):
+    """``(P, WP)`` of :func:`_gltf_parts`: metallic 0, base colour 1, ``specular`` 0 (the diffuse term
+    alone, ``1/pi``) and ``specular`` 1 with ``specular_color`` 0 (``f0 = 0``, ``f90 = 1``: ``SW + P - WP``)."""
+    probe = _PROBES[probe_key]
+    P = _gltf_eval(probe, 0.5, metallic=0.0, specular=0.0, base_color=1.0)[:, 0]
+    SW = _gltf_eval(probe, 0.5, metallic=1.0, base_color=0.0)[:, 0]
+    return P, SW + P - _gltf_eval(probe, 0.5, metallic=0.0, specular=1.0, specular_color=0.0, base_color=1.0)[:, 0]
+
+
+def _gltf_bases(probe, family, point):
+    """``gltf-pbr``'s values at base colour 0 and the change from 0 to 1 (per channel, (N, 3)) at ``point``,
+    exact, from :func:`_gltf_parts` of its roughness (so a family's metallic and KHR_materials_specular axes
+    cost no evaluation): with ``m`` metallic, ``s`` specular, ``f0 = min(0.04 specular_color, 1) s`` per
+    channel and ``f0m`` the same of the largest channel (the specification's ``max_value``),
+
+        f = (1 - m) (f0 S + (s - f0) SW) + m SW + base (m (S - SW) + (1 - m) ((1 - f0m) P - (s - f0m) WP))
+
+    (:mod:`plausible.models.gltf_pbr`: ``dielectric_brdf`` and ``metal_brdf`` mixed by ``m``;
+    tests/conversion/test_mitsuba_fit.py holds it to the model's own evaluation)."""
+    p = {**dict(family.fixed), **point}
+    sc = np.full(3, float(p.get("specular_color", 1.0)))
+    if family.tint:
+        sc = sc * np.asarray(family.tint[1], float)
+    m, s = float(p.get("metallic", 0.0)), float(p.get("specular", 1.0))
+    _PROBES.setdefault(probe.key, probe)
+    S, SW, P, WP = _gltf_parts(probe.key, float(p["roughness"]))
+    f0 = np.minimum(0.04 * sc, 1.0) * s
+    f0m = float(np.minimum(0.04 * sc.max(), 1.0) * s)
+    B0 = (1.0 - m) * (S[:, None] * f0 + SW[:, None] * (s - f0)) + m * SW[:, None]
+    B1 = m * (S - SW) + (1.0 - m) * ((1.0 - f0m) * P - (s - f0m) * WP)
+    return B0, np.broadcast_to(B1[:, None], B0.shape)
 
 
 # -- the colours at one point ---------------------------------------------------------------------
@@ -388,6 +451,10 @@ BAND_HARD, HARD_WEIGHT = 0.04, 1e5
 #: coat's blend where its metric's figure is lower too (:func:`plausible.conversion.convert`'s choice): the
 #: Done-when's 0.05 less the probe's largest difference from Mitsuba's sampler.
 BAND_KEEP = 0.045
+#: ... and where its metric's figure is at most this fraction above the coat's blend's: the blend adds a
+#: diffuse term the source may not have (a metal's MTL ``Ks 0.9 0.7 0.4``, ``Ns 60``: ``roughconductor``
+#: 2.36, the blend 2.34 with a red diffuse under its coat), a difference of 1 % is not a reason for it.
+BAND_KEEP_MARGIN = 0.05
 
 
 def _band(a, A, rows, hard=False):
@@ -468,58 +535,34 @@ LSQ_ALBEDO = 10.0
 
 
 def _lsq(F, Alb, g, A, eps, metric, band=None):
-    """Colours per channel by bounded linear least squares (step 2); (J, C).  ``band``: the rows of
-    ``Alb`` where the albedo is held within :data:`BAND_HARD` of the source's (:func:`_within_band`)."""
-    from scipy.optimize import lsq_linear
+    """Colours per channel by bounded linear least squares (step 2; :func:`plausible.fitting.linear.bounded`,
+    the fitter's colour step); (J, C).  ``band``: the rows of ``Alb`` where the albedo is held within
+    :data:`BAND_HARD` of the source's (:func:`plausible.fitting.linear.within_band`)."""
+    from ..fitting.linear import bounded, within_band
 
     J, C = F.shape[0] - 1, g.shape[1]
     x = np.zeros((J, C))
-    F_all, Alb_all = F, Alb
     for c in range(C):
-        F, Alb = _ch(F_all, c), _ch(Alb_all, c)
-        if metric == "l2-cos":
-            rows, rhs = F[1:].T, g[:, c] - F[0]
-        else:
-            w = 1.0 / (g[:, c] + eps)
-            ok = A[:, c] > 1e-12
-            lam = LSQ_ALBEDO * math.sqrt(len(g) / max(int(ok.sum()), 1))
-            wa = lam / np.where(ok, A[:, c], 1.0) * ok
-            rows = np.concatenate([F[1:].T * w[:, None], Alb[1:].T * wa[:, None]])
-            rhs = np.concatenate([(g[:, c] - F[0]) * w, (A[:, c] - Alb[0]) * wa])
-        x[:, c] = lsq_linear(rows, rhs, bounds=(0.0, 1.0), method="bvls").x   # active set: exact, ~10x faster than trf here
+        rows, rhs = _rows(_ch(F, c), _ch(Alb, c), g[:, c], A[:, c], eps, metric)
+        x[:, c] = bounded(rows, rhs)
         if band is not None:
-            x[:, c] = _within_band(rows, rhs, Alb, A[:, c], band, x[:, c])
+            Ac = _ch(Alb, c)
+            x[:, c] = within_band(rows, rhs, Ac[1:, band].T, A[band, c] - Ac[0, band], BAND_HARD, x[:, c])
     return x
 
 
-def _within_band(R, r, Alb, Ac, band, x0):
-    """The colours of one channel minimising ``|R x - r|^2`` on ``[0, 1]`` with the albedo at the
-    incidences ``band`` (rows of ``Alb``) within :data:`BAND_HARD` of ``Ac`` (SLSQP from ``x0``);
-    where no colours meet that, those nearest to it (the linear program of the smallest largest
-    difference).  ``x0`` when it already meets it."""
-    from scipy.optimize import linprog, minimize
-
-    P, q = Alb[1:, band].T, Ac[band] - Alb[0, band]        # albedo at the band rows: P x, target q
-    if np.all(np.abs(P @ x0 - q) <= BAND_HARD):
-        return x0
-    J = len(x0)
-    # min t subject to |P x - q| <= t, 0 <= x <= 1
-    lp = linprog(np.r_[np.zeros(J), 1.0], A_ub=np.block([[P, -np.ones((len(q), 1))], [-P, -np.ones((len(q), 1))]]),
-                 b_ub=np.r_[q, -q], bounds=[(0.0, 1.0)] * J + [(0.0, None)], method="highs")
-    if not lp.success:
-        return x0
-    xf = lp.x[:J]
-    if lp.x[J] > BAND_HARD:
-        return xf
-    tol = BAND_HARD - 1e-6
-    cons = [{"type": "ineq", "fun": lambda x: tol - (P @ x - q), "jac": lambda x: -P},
-            {"type": "ineq", "fun": lambda x: tol + (P @ x - q), "jac": lambda x: P}]
-    scale = max(float(np.sum(r * r)), 1e-30)
-    res = minimize(lambda x: float(np.sum((R @ x - r) ** 2)) / scale, xf,
-                   jac=lambda x: 2.0 * R.T @ (R @ x - r) / scale, method="SLSQP", bounds=[(0.0, 1.0)] * J,
-                   constraints=cons, options=dict(maxiter=200, ftol=1e-12))
-    x = np.clip(res.x, 0.0, 1.0)
-    return x if np.all(np.abs(P @ x - q) <= BAND_HARD) else xf
+def _rows(F, Alb, g, A, eps, metric):
+    """One channel's least squares in its colours ``x``: ``(rows, rhs)`` with ``|rows x - rhs|^2`` the
+    metric's figure (``l2-cos``) or its linearisation (relative residuals ``(c - g) / (g + eps)`` and
+    ``(a - A) / A``, the albedo rows weighted by :data:`LSQ_ALBEDO`)."""
+    if metric == "l2-cos":
+        return F[1:].T, g - F[0]
+    w = 1.0 / (g + eps)
+    ok = A > 1e-12
+    lam = LSQ_ALBEDO * math.sqrt(len(g) / max(int(ok.sum()), 1))
+    wa = lam / np.where(ok, A, 1.0) * ok
+    return (np.concatenate([F[1:].T * w[:, None], Alb[1:].T * wa[:, None]]),
+            np.concatenate([(g - F[0]) * w, (A - Alb[0]) * wa]))
 
 
 class ColourObjective:
@@ -599,6 +642,73 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
     return x
 
 
+#: The axes' search (:class:`AxesObjective`): the difference step of the Jacobian in the axes' own units
+#: (``ln alpha`` for a roughness; Mitsuba evaluates in single precision, so far above
+#: :data:`plausible.fitting.fit.FD_STEP`), least squares' tolerances, and its evaluations (``maxiter``
+#: times the axes plus one).
+AXIS_STEP, AXIS_TOL, AXIS_MAXITER = 1e-3, 1e-4, 4
+
+
+class AxesObjective:
+    """A family's axes at their best colours -- each point's colours by bounded linear least squares
+    (:func:`_lsq`, the band a constraint where ``hard``): a variable projection (Golub and Pereyra 1973)
+    -- as an objective of the fitter's optimiser (:func:`plausible.fitting.fit.optimise`, whose protocol
+    it follows, least squares whatever the metric): ``residuals_many`` the colours' least-squares rows
+    (:func:`_rows`: the metric's, or for ``perceptual`` its linearisation) at those colours, with the
+    highlight's and the band's excesses as rows (``sqrt(weight) excess``, as :class:`ColourObjective`);
+    ``fun(z)`` the true figure minimised (:func:`_figure`), the best point by it kept in ``best_x`` (the
+    grid's best is never lost to a least-squares step that worsens the figure).  Variables: the axes in
+    their own units (:meth:`Axis.fwd`); :attr:`points` counts the axis points evaluated."""
+
+    def __init__(self, probe, fam, g, A, eps, metric, rows, hard, peaks):
+        from types import SimpleNamespace
+
+        self.probe, self.fam, self.g, self.A, self.eps, self.rows, self.hard, self.peaks = \
+            probe, fam, g, A, eps, rows, hard, peaks
+        self.vars = [SimpleNamespace(name=a.name, bounds=(a.fwd(a.lo), a.fwd(a.hi))) for a in fam.axes]
+        self.problem = SimpleNamespace(metric=metric, maxiter=AXIS_MAXITER)
+        self.least_squares, self.fd_step, self.tol = True, AXIS_STEP, AXIS_TOL
+        self.best_x, self.best_value, self.points = None, math.inf, 0
+        self.rejected, self.timed_out, self.fd = 0, False, None
+
+    def point(self, z) -> dict:
+        return {a.name: a.inv(float(t)) for a, t in zip(self.fam.axes, z)}
+
+    def _at(self, z):
+        self.points += 1
+        F, Alb, H = basis(self.probe, self.fam, self.point(z))
+        metric = self.problem.metric
+        x = _lsq(F, Alb, self.g, self.A, self.eps, metric, self.rows if self.hard else None)
+        hl = Highlight(H, self.peaks)
+        value = _figure(metric, F, Alb, x, self.g, self.A, self.eps, self.rows, self.hard, hl)[0]
+        if value < self.best_value:
+            self.best_x, self.best_value = np.array(z, float), value
+        return F, Alb, x, hl, value
+
+    def __call__(self, z, beta=None):
+        return self._at(np.asarray(z, float))[-1]
+
+    def residuals_many(self, zs) -> list:
+        out = []
+        for z in zs:
+            F, Alb, x, hl, _ = self._at(np.asarray(z, float))
+            r = []
+            for c in range(x.shape[1]):
+                R, rhs = _rows(_ch(F, c), _ch(Alb, c), self.g[:, c], self.A[:, c], self.eps, self.problem.metric)
+                r.append((R @ x[:, c] - rhs) / math.sqrt(max(float(rhs @ rhs), 1e-300)))
+            r.append(math.sqrt(PEAK_WEIGHT) * hl.excess(x))
+            d = np.abs(_predict(Alb, x)[self.rows] - self.A[self.rows]).ravel()
+            r.append(math.sqrt(BAND_WEIGHT) * np.maximum(d - BAND, 0.0))
+            if self.hard:
+                r.append(math.sqrt(HARD_WEIGHT) * np.maximum(d - BAND_HARD, 0.0))
+            out.append(np.concatenate(r))
+        return out
+
+    def best_params(self, x0) -> dict:
+        x = self.best_x if self.best_x is not None else np.asarray(x0, float)
+        return {v.name: float(t) for v, t in zip(self.vars, x)}
+
+
 # -- the fit ---------------------------------------------------------------------------------------
 
 @dataclass
@@ -656,31 +766,16 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     g, A, peaks = target if target is not None else source_target(source, probe)
     eps = M.floor(g)
     rows = [int(np.argmin(np.abs(probe.thetas - math.radians(t)))) for t in REPORT_THETAS]
-    count = [0]
+    # 2. scan; 3. refine the axes from the best grid point by the fitter's optimiser
+    obj = AxesObjective(probe, fam, g, A, eps, metric, rows, hard, peaks)
+    grid = [[a.fwd(v) for v, a in zip(vals, fam.axes)] for vals in _product([a.values for a in fam.axes])]
+    for z in grid:
+        obj(z)
+    best = obj.point(obj.best_x)
+    if fam.axes:
+        from ..fitting.fit import optimise
 
-    def score(point):
-        count[0] += 1
-        F, Alb, H = basis(probe, fam, point)
-        x = _lsq(F, Alb, g, A, eps, metric, rows if hard else None)
-        return _figure(metric, F, Alb, x, g, A, eps, rows, hard, Highlight(H, peaks))[0], x
-
-    # 2. scan
-    grid = [dict(zip([a.name for a in fam.axes], vals))
-            for vals in _product([a.values for a in fam.axes])]
-    scored = [(score(p)[0], i) for i, p in enumerate(grid)]
-    best = dict(grid[min(scored)[1]])
-    # 3. refine each axis between the best grid point's neighbours
-    from scipy.optimize import minimize_scalar
-
-    for ax in fam.axes:
-        k = ax.values.index(best[ax.name])
-        lo = ax.fwd(ax.values[k - 1]) if k > 0 else ax.fwd(ax.lo)
-        hi = ax.fwd(ax.values[k + 1]) if k + 1 < len(ax.values) else ax.fwd(ax.hi)
-        here = score(best)[0]
-        r = minimize_scalar(lambda t: score({**best, ax.name: ax.inv(t)})[0], bounds=(lo, hi), method="bounded",
-                            options=dict(maxiter=8, xatol=1e-3))
-        if r.fun < here:
-            best[ax.name] = ax.inv(float(r.x))
+        best = obj.point([optimise(obj, [obj.best_x.copy()], lambda: None)[a.name] for a in fam.axes])
     F, Alb, H = basis(probe, fam, best)
     hl = Highlight(H, peaks)
     # 4. polish the colours
@@ -692,7 +787,7 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     key = family if isinstance(family, str) else next((k for k, f in FAMILIES.items() if f == fam), fam.type)
     r = measure(d, key, probe, (g, A, peaks), metric)
     r.point, r.colours, r.points, r.figure, r.hard = best, {s: [float(v) for v in c] for s, c in colours.items()}, \
-        count[0], figure, hard
+        obj.points, figure, hard
     return r
 
 

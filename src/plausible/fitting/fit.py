@@ -36,7 +36,8 @@ specifications with their ranges); the albedo comes from
 4. **Colours**, for a multi-channel target: all parameters are first fitted to
    the channel mean with colours as scalars, then the colour parameters alone
    are refitted per channel with the others fixed: under ``l2-cos``, where the model
-   is linear in its colours, in closed form (:func:`_linear_colours`, BVLS), else by
+   is linear in its colours, in closed form (:func:`_linear_colours`,
+   :func:`plausible.fitting.linear.bounded`), else by
    :func:`optimise`.
 5. **Identifiability**: at the solution, the Jacobian of ``ln(f cos + eps)``
    on the sample pairs with respect to the free variables (central
@@ -746,6 +747,7 @@ def _least_squares(fun: _Objective, x0, bounds):
 
     lo, hi = np.array([b[0] for b in bounds], float), np.array([b[1] for b in bounds], float)
     x0 = np.clip(np.asarray(x0, float), lo, hi)
+    step, tol = getattr(fun, "fd_step", FD_STEP), getattr(fun, "tol", 1e-12)
     last = {}
 
     def res(x):
@@ -755,7 +757,7 @@ def _least_squares(fun: _Objective, x0, bounds):
 
     def jac(x):
         x = np.asarray(x, float)
-        steps = np.where(x + FD_STEP <= hi, FD_STEP, -FD_STEP)
+        steps = np.where(x + step <= hi, step, -step)
         pts = [x + s * e for s, e in zip(steps, np.eye(len(x)))]
         if "x" in last and np.array_equal(last["x"], x):
             rs, r0 = fun.residuals_many(pts), last["r"]
@@ -763,7 +765,6 @@ def _least_squares(fun: _Objective, x0, bounds):
             *rs, r0 = fun.residuals_many(pts + [x])
         return np.column_stack([(r - r0) / s for r, s in zip(rs, steps)])
 
-    tol = 1e-12
     return least_squares(res, x0, jac=jac if JACOBIAN == "population" else "2-point", bounds=(lo, hi),
                          method="trf", x_scale="jac", ftol=tol, xtol=tol, gtol=tol,
                          max_nfev=fun.problem.maxiter * (len(x0) + 1))
@@ -783,7 +784,11 @@ def optimise(fun, x0s, tick) -> dict:
     attributes): ``vars`` (each with ``bounds``), ``problem.metric`` and
     ``problem.maxiter``, ``fun(x)`` the true figure and ``fun(x, beta)`` its smooth
     bound, ``residuals_many(xs)`` (least squares), the best point kept in ``best_x``,
-    ``best_value``, ``best_params(x0)``, and ``rejected``, ``timed_out``, ``fd``."""
+    ``best_value``, ``best_params(x0)``, and ``rejected``, ``timed_out``, ``fd``; optionally
+    ``least_squares`` (True: least squares on ``residuals_many`` whatever the metric, the true
+    figure kept by ``fun(x)``: :class:`plausible.conversion.mitsuba.AxesObjective`, whose
+    residuals linearise ``perceptual``), ``fd_step`` (the Jacobian's difference step, else
+    :data:`FD_STEP`) and ``tol`` (least squares' ``ftol``, ``xtol``, ``gtol``; else 1e-12)."""
     from scipy.optimize import minimize
 
     bounds = [v.bounds for v in fun.vars]
@@ -793,7 +798,7 @@ def optimise(fun, x0s, tick) -> dict:
     for x0 in x0s:
         try:
             x = np.array(x0, float)
-            if fun.problem.metric == "perceptual":
+            if not getattr(fun, "least_squares", fun.problem.metric != "perceptual"):
                 for beta in (20.0, 200.0, 2000.0):
                     r = _lbfgsb(fun, x, beta, bounds, maxiter=maxiter)
                     x = r.x
@@ -924,7 +929,7 @@ def _linear_colours(obj, x_shared, basis):
     pb = obj.problem
     if pb.metric != "l2-cos" or not obj.vars:
         return None
-    from scipy.optimize import lsq_linear
+    from .linear import bounded
 
     names = {v.name for v in obj.vars}
     key = tuple(sorted((k, repr(v)) for k, v in obj.params0.items() if k not in names))
@@ -938,7 +943,7 @@ def _linear_colours(obj, x_shared, basis):
     if den == 0.0:
         return None
     lo, hi = [np.array([v.bounds[k] for v in obj.vars]) for k in (0, 1)]
-    x = np.clip(lsq_linear(B / den, (g - c0) / den, bounds=(lo, hi), method="bvls").x, lo, hi)
+    x = bounded(B / den, (g - c0) / den, lo, hi)
     if pb.highlight > 0.0 and np.any(M.highlight_excess(c0 + B @ x, g, pb.rows, pb.eps) != 0.0):
         return None
     rejected = obj.rejected
