@@ -696,7 +696,8 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
     nothing renders) of the ends -- the dielectric with KHR_materials_specular's factors, its lobe
     tinted as the source's (:func:`.mitsuba.gltf_dielectric`, :func:`.mitsuba.lobe_tint`), and the metal
     (metallic 1; the free fit ``r`` where it ended there) -- each fitted; a fractional metallic of ``r`` only where its image error is lower than the better
-    end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric), and an end that
+    end's by ``margin`` (a fraction: a fractional metallic mixes a metal into a dielectric) and by more than
+    :data:`IMAGE_NOISE`, and an end that
     needs KHR_materials_specular over one that does not likewise and by more than :data:`IMAGE_NOISE` (a
     tinted dielectric with ``specular`` 1 is a metal's Schlick Fresnel exactly: on a tie the core material,
     which every viewer reads).  An end is
@@ -726,7 +727,7 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
         notes.append(f"{_gltf_label(e)} chosen by the {what}: {tried}")
         return e
     said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}; {tried}"
-    if sr <= (1.0 - margin) * se[k]:
+    if sr <= (1.0 - margin) * se[k] - (IMAGE_NOISE if what.startswith("image") else 0.0):
         notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower than the better end)")
         return r
     notes.append(f"{_gltf_label(e)}: {said} (a fractional metallic is kept only where it is more "

@@ -649,6 +649,15 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
 AXIS_STEP, AXIS_TOL, AXIS_MAXITER = 1e-3, 1e-4, 4
 
 
+#: A point of the axes replaces the best so far only where its figure is lower by more than this fraction:
+#: least squares steps off a grid value (``metallic`` 0) by 1e-6 for a figure lower by rounding, and a
+#: glTF dielectric converted to itself came back at ``metallic`` 1.3e-6.
+KEEP_RTOL = 1e-9
+#: An axis this close to a bound (a fraction of its span) after the search is tried on the bound
+#: (:meth:`AxesObjective.snapped`).
+SNAP, SNAP_TOL = 1e-4, 1e-3
+
+
 class AxesObjective:
     """A family's axes at their best colours -- each point's colours by bounded linear least squares
     (:func:`_lsq`, the band a constraint where ``hard``): a variable projection (Golub and Pereyra 1973)
@@ -665,7 +674,9 @@ class AxesObjective:
 
         self.probe, self.fam, self.g, self.A, self.eps, self.rows, self.hard, self.peaks = \
             probe, fam, g, A, eps, rows, hard, peaks
-        self.vars = [SimpleNamespace(name=a.name, bounds=(a.fwd(a.lo), a.fwd(a.hi))) for a in fam.axes]
+        self.vars = [SimpleNamespace(name=a.name, bounds=(a.fwd(a.lo), a.fwd(a.hi)),
+                                     marks=(a.fwd(a.lo), a.fwd(a.hi)) + tuple(a.fwd(v) for v in a.values))
+                     for a in fam.axes]
         self.problem = SimpleNamespace(metric=metric, maxiter=AXIS_MAXITER)
         self.least_squares, self.fd_step, self.tol = True, AXIS_STEP, AXIS_TOL
         self.best_x, self.best_value, self.points = None, math.inf, 0
@@ -681,7 +692,7 @@ class AxesObjective:
         x = _lsq(F, Alb, self.g, self.A, self.eps, metric, self.rows if self.hard else None)
         hl = Highlight(H, self.peaks)
         value = _figure(metric, F, Alb, x, self.g, self.A, self.eps, self.rows, self.hard, hl)[0]
-        if value < self.best_value:
+        if self.best_x is None or value < self.best_value - KEEP_RTOL * abs(self.best_value):   # not rounding
             self.best_x, self.best_value = np.array(z, float), value
         return F, Alb, x, hl, value
 
@@ -707,6 +718,27 @@ class AxesObjective:
     def best_params(self, x0) -> dict:
         x = self.best_x if self.best_x is not None else np.asarray(x0, float)
         return {v.name: float(t) for v, t in zip(self.vars, x)}
+
+    def snapped(self, z):
+        """``z`` with each axis within :data:`SNAP` of its span from a bound or a grid value (``metallic`` 0,
+        ``specular_color`` 1) put on it, where the figure there
+        is at most :data:`SNAP_TOL` higher (of the figure, or absolute below 1: the metrics' figures are
+        relative errors and log ratios, 1e-3 of which no one sees): least squares' reflective steps keep inside the bounds, and
+        ``metallic`` 1.3e-6 is a dielectric said as a mixture, ``specular`` 0.99998 an extension not needed."""
+        z = np.array(z, float)
+        for k, v in enumerate(self.vars):
+            lo, hi = v.bounds
+            for b in v.marks:
+                if 0.0 < abs(z[k] - b) <= SNAP * (hi - lo):
+                    t = z.copy()
+                    t[k] = b
+                    value, here = self(t), self._figure_at(z)
+                    if value <= here + SNAP_TOL * max(abs(here), 1.0):
+                        z = t
+        return z
+
+    def _figure_at(self, z):
+        return self._at(np.asarray(z, float))[-1]
 
 
 # -- the fit ---------------------------------------------------------------------------------------
@@ -775,7 +807,8 @@ def fit_family(source, family: str | Family, metric: str = "perceptual", *, prob
     if fam.axes:
         from ..fitting.fit import optimise
 
-        best = obj.point([optimise(obj, [obj.best_x.copy()], lambda: None)[a.name] for a in fam.axes])
+        z = np.array([optimise(obj, [obj.best_x.copy()], lambda: None)[a.name] for a in fam.axes])
+        best = obj.point(obj.snapped(z))
     F, Alb, H = basis(probe, fam, best)
     hl = Highlight(H, peaks)
     # 4. polish the colours
@@ -838,7 +871,8 @@ def gltf_dielectric(tint=(1.0, 1.0, 1.0)) -> Family:
     stays affine in ``base_color`` per channel).  ``f0_c = min(0.04 specular_color tint_c, 1) specular``:
     a coloured lobe (a metal's, Ngan's ``chrome``) keeps its colour; ``f90`` is white (``specular``)."""
     t = np.clip(np.asarray(tint, float), 0.0, None)
-    t = tuple(float(v) for v in (t / t.max() if np.all(np.isfinite(t)) and t.max() > 0 else np.ones(3)))
+    t = t / t.max() if np.all(np.isfinite(t)) and t.max() > 0 else np.ones(3)
+    t = tuple(float(v) for v in np.where(np.abs(t - 1.0) <= 1e-9, 1.0, t))     # a grey lobe's rounding: white
     if t == (1.0, 1.0, 1.0):
         return GLTF_DIELECTRIC
     f = GLTF_DIELECTRIC
