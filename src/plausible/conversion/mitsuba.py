@@ -647,10 +647,6 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
 #: :data:`plausible.fitting.fit.FD_STEP`), least squares' tolerances, and its evaluations (``maxiter``
 #: times the axes plus one).
 AXIS_STEP, AXIS_TOL, AXIS_MAXITER = 1e-3, 1e-4, 4
-#: ... then a Powell polish of the true figure (:func:`plausible.fitting.fit.optimise`), this many evaluations
-#: an axis: the residuals linearise ``perceptual``'s maxima, and least squares alone left
-#: ``color-changing-paint3@low2012/microfacet-e2`` to glTF at perceptual 1.00 against 0.59 (FLIP 0.23 / 0.14).
-AXIS_POLISH = 8
 
 
 #: A point of the axes replaces the best so far only where its figure is lower by more than this fraction:
@@ -682,7 +678,7 @@ class AxesObjective:
                                      marks=(a.fwd(a.lo), a.fwd(a.hi)) + tuple(a.fwd(v) for v in a.values))
                      for a in fam.axes]
         self.problem = SimpleNamespace(metric=metric, maxiter=AXIS_MAXITER)
-        self.least_squares, self.fd_step, self.tol, self.polish = True, AXIS_STEP, AXIS_TOL, AXIS_POLISH
+        self.least_squares, self.fd_step, self.tol = True, AXIS_STEP, AXIS_TOL
         self.best_x, self.best_value, self.points = None, math.inf, 0
         self.rejected, self.timed_out, self.fd = 0, False, None
 

@@ -787,8 +787,7 @@ def optimise(fun, x0s, tick) -> dict:
     ``best_value``, ``best_params(x0)``, and ``rejected``, ``timed_out``, ``fd``; optionally
     ``least_squares`` (True: least squares on ``residuals_many`` whatever the metric, the true
     figure kept by ``fun(x)``: :class:`plausible.conversion.mitsuba.AxesObjective`, whose
-    residuals linearise ``perceptual``), ``polish`` (evaluations per variable of a Powell polish
-    on the true figure after least squares; 0 or absent: none), ``fd_step`` (the Jacobian's difference step, else
+    residuals linearise ``perceptual``), ``fd_step`` (the Jacobian's difference step, else
     :data:`FD_STEP`) and ``tol`` (least squares' ``ftol``, ``xtol``, ``gtol``; else 1e-12)."""
     from scipy.optimize import minimize
 
@@ -821,12 +820,6 @@ def optimise(fun, x0s, tick) -> dict:
                         tick()      # this start and the ones skipped: the bar completes
                     break           # an optimum found before, or an exact fit: more starts would repeat it
                 found.append((r.x, value))
-                polish = getattr(fun, "polish", 0)
-                if polish:
-                    # the true figure where the residuals only linearise it: derivative-free line searches
-                    # along each variable in turn (Powell), ``polish`` evaluations a variable
-                    minimize(fun, fun.best_x, method="Powell", bounds=bounds,
-                             options=dict(maxfev=polish * len(x), xtol=1e-3, ftol=1e-4))
                 if fun.rejected > rejected:
                     # derivative-free polish: the trust region stops where a constraint the model
                     # enforces by ValueError (kd + ks <= 1) cuts it
