@@ -444,3 +444,28 @@ def test_the_coats_blend_is_not_kept_where_another_family_meets_the_band_with_a_
             and plain.errors["perceptual"] <= (1.0 + CM.BAND_KEEP_MARGIN) * tir.errors["perceptual"])
     assert (c.params["bsdf_0"]["type"] == "diffuse") == kept == any("blendbsdf kept" in n for n in c.notes)
     assert albedo_check(plausible.make(spec), c.params)[0]
+
+
+def test_the_axes_are_searched_by_the_fitters_optimiser(monkeypatch):
+    """One fitter (issue 40): a family's axes go through plausible.fitting.fit.optimise (an AxesObjective,
+    least squares on the colours' projected residuals), and the search finds a roughconductor source's own alpha off the
+    grid (0.22 lies between the grid's 0.183 and 0.280) to 1 %, its colour to 1e-3."""
+    import importlib
+
+    F = importlib.import_module("plausible.fitting.fit")
+    seen = []
+    real = F.optimise
+
+    def spy(fun, x0s, tick):
+        seen.append(type(fun).__name__)
+        return real(fun, x0s, tick)
+
+    monkeypatch.setattr(F, "optimise", spy)
+    src = CM._load({"type": "roughconductor", "distribution": "ggx", "material": "none", "alpha": 0.22,
+                    "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]}})
+    src.peak_directions = lambda wi: [np.array([-wi[0], -wi[1], wi[2]])]
+    r = CM.fit_family(src, "roughconductor", "l2-cos")
+    assert "AxesObjective" in seen and "ColourObjective" in seen
+    assert all(abs(v - 0.22) > 0.03 for v in CM.ALPHA.values)
+    assert r.point["alpha"] == pytest.approx(0.22, rel=0.01)
+    np.testing.assert_allclose(r.colours["specular_reflectance"], [0.9, 0.6, 0.3], atol=1e-3)
