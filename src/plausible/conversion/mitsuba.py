@@ -646,7 +646,7 @@ def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
 #: (``ln alpha`` for a roughness; Mitsuba evaluates in single precision, so far above
 #: :data:`plausible.fitting.fit.FD_STEP`), least squares' tolerances, and its evaluations (``maxiter``
 #: times the axes plus one).
-AXIS_STEP, AXIS_TOL, AXIS_MAXITER = 1e-3, 1e-4, 4
+AXIS_STEP, AXIS_TOL, AXIS_MAXITER = 1e-3, 1e-3, 2
 
 
 #: A point of the axes replaces the best so far only where its figure is lower by more than this fraction:
