@@ -770,6 +770,27 @@ def _least_squares(fun: _Objective, x0, bounds):
                          max_nfev=fun.problem.maxiter * (len(x0) + 1))
 
 
+def _line_polish(fun, bounds, evals: int):
+    """The true figure ``fun(x)`` along each variable in turn from the best point so far, by SciPy's bounded
+    Brent search of ``evals`` evaluations within ``fun.bracket(k, x)`` (else the variable's bounds): where
+    least squares only linearises the figure (:class:`plausible.conversion.mitsuba.AxesObjective`), the
+    line searches find the figure's own valley and least squares goes on from there."""
+    from scipy.optimize import minimize_scalar
+
+    for k in range(len(bounds)):
+        x = np.array(fun.best_x, float)
+        lo, hi = fun.bracket(k, x) if hasattr(fun, "bracket") else bounds[k]
+        if hi - lo <= 0.0:
+            continue
+
+        def along(t, x=x, k=k):
+            y = x.copy()
+            y[k] = t
+            return fun(y)
+
+        minimize_scalar(along, bounds=(lo, hi), method="bounded", options=dict(maxiter=evals, xatol=1e-3))
+
+
 def optimise(fun, x0s, tick) -> dict:
     """Step 3 from each start in ``x0s``, the one optimiser of :func:`fit` and of
     :func:`plausible.convert` (its Mitsuba families' colours,
@@ -787,7 +808,9 @@ def optimise(fun, x0s, tick) -> dict:
     ``best_value``, ``best_params(x0)``, and ``rejected``, ``timed_out``, ``fd``; optionally
     ``least_squares`` (True: least squares on ``residuals_many`` whatever the metric, the true
     figure kept by ``fun(x)``: :class:`plausible.conversion.mitsuba.AxesObjective`, whose
-    residuals linearise ``perceptual``), ``fd_step`` (the Jacobian's difference step, else
+    residuals linearise ``perceptual``), ``polish`` (evaluations per variable of a bounded line
+    search of the true figure from the start, before least squares, :func:`_line_polish`, within
+    ``bracket(k, x)`` where given; 0 or absent: none), ``fd_step`` (the Jacobian's difference step, else
     :data:`FD_STEP`) and ``tol`` (least squares' ``ftol``, ``xtol``, ``gtol``; else 1e-12)."""
     from scipy.optimize import minimize
 
@@ -813,6 +836,10 @@ def optimise(fun, x0s, tick) -> dict:
                              options=dict(maxfev=60 * (len(x) + 1), xatol=1e-7, fatol=1e-10))
             else:
                 rejected = fun.rejected
+                if getattr(fun, "polish", 0):
+                    fun(x)                          # the start is the best point so far
+                    _line_polish(fun, bounds, fun.polish)
+                    x = np.array(fun.best_x, float)
                 r = _least_squares(fun, x, bounds)
                 value = 2.0 * float(r.cost)
                 if _same_optimum(found, r.x, value, spans) or fun.best_value <= PERFECT:
