@@ -37,9 +37,10 @@ NumPy.  The steps (:func:`fit_family`):
    linearisation of the perceptual metric), scored by the true figure of the
    chosen metric (:func:`plausible.fitting.metrics.errors`).
 3. **Refine** the axes from the best grid point by the fitter's optimiser
-   (:func:`plausible.fitting.fit.optimise`, least squares with a difference Jacobian) on
-   the colours' residuals at each point's best colours (:class:`AxesObjective`: a
-   variable projection), the best point by the true figure kept.
+   (:func:`plausible.fitting.fit.optimise`): line searches of the true figure along each
+   axis between the grid's neighbours (:data:`AXIS_POLISH`), then least squares with a
+   difference Jacobian on the colours' residuals at each point's best colours
+   (:class:`AxesObjective`: a variable projection), the best point by the true figure kept.
 4. **Polish** the colours of each channel on the true metric (L-BFGS-B on the
    smooth bound at beta = 20, 200, 2000, then Nelder-Mead), kept if better.
 5. **Measure** the result as loaded from its dict: every metric through Mitsuba
@@ -668,7 +669,8 @@ class AxesObjective:
     """A family's axes at their best colours -- each point's colours by bounded linear least squares
     (:func:`_lsq`, the band a constraint where ``hard``): a variable projection (Golub and Pereyra 1973)
     -- as an objective of the fitter's optimiser (:func:`plausible.fitting.fit.optimise`, whose protocol
-    it follows, least squares whatever the metric): ``residuals_many`` the colours' least-squares rows
+    it follows: line searches of the true figure within :meth:`bracket` first, :data:`AXIS_POLISH`, then
+    least squares whatever the metric): ``residuals_many`` the colours' least-squares rows
     (:func:`_rows`: the metric's, or for ``perceptual`` its linearisation) at those colours, with the
     highlight's and the band's excesses as rows (``sqrt(weight) excess``, as :class:`ColourObjective`);
     ``fun(z)`` the true figure minimised (:func:`_figure`), the best point by it kept in ``best_x`` (the
