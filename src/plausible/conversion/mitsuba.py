@@ -362,7 +362,12 @@ def _gltf_eval(probe, roughness, **kw):
     return np.broadcast_to(f.reshape(len(f), -1), (len(f), 3))
 
 
-@lru_cache(maxsize=256)
+#: Roughnesses whose glTF parts are kept (:func:`_gltf_parts`): two arrays of the probe's ~100k pairs each,
+#: 1.6 MB a roughness; a conversion's three glTF families visit about 50.
+GLTF_PARTS_CACHE = 48
+
+
+@lru_cache(maxsize=GLTF_PARTS_CACHE)
 def _gltf_parts(probe_key, roughness: float):
     """``(S, SW, P, WP)`` of ``gltf-pbr`` at ``roughness`` on the probe's pairs, each an evaluation of the
     registered model read channel by channel: ``S = Vis D`` and ``SW = Vis D w`` (metallic 1, base colour
