@@ -66,7 +66,8 @@ def test_each_family_is_affine_in_its_colours_on_mitsuba(probe, name, point):
     (CM.FAMILIES["gltf-pbr"], {"roughness": 0.3, "metallic": 0.4}),
     (CM.gltf_fixed_metallic(1.0), {"roughness": 0.12}),
     (CM.GLTF_DIELECTRIC, {"roughness": 0.5, "specular": 0.3, "specular_color": 4.0}),
-    # f0 = min(0.04 x 25 tint, 1): the clamp, and max_value of the tint in the diffuse weight
+    # f0 = 0.04 x 25 x tint: 1 in the red channel (the clamp's edge), and max_value of the tint in the
+    # diffuse weight (the channel mean there instead fails this test: 0.087)
     (CM.gltf_dielectric((1.0, 0.5, 0.2)), {"roughness": 0.2, "specular": 0.7, "specular_color": 25.0})])
 def test_gltf_bases_from_one_evaluation_per_roughness_are_the_models_own_values(probe, fam, point):
     """The glTF bases are composed from one evaluation per roughness (:func:`CM._gltf_bases`), not

@@ -728,7 +728,8 @@ def metallic_decision(model, r, metric, probe, target, notes, margin: float = ME
         return e
     said = f"{what} {sr:.3g} at the fitted metallic {m:.3g}; {tried}"
     if sr <= (1.0 - margin) * se[k] - (IMAGE_NOISE if what.startswith("image") else 0.0):
-        notes.append(f"metallic {m:.3g} kept: {said} (more than {margin:.0%} lower than the better end)")
+        notes.append(f"metallic {m:.3g} kept: {said} (at least {margin:.0%} lower than the better end, and by more "
+                     f"than the renders' noise)")
         return r
     notes.append(f"{_gltf_label(e)}: {said} (a fractional metallic is kept only where it is more "
                  f"than {margin:.0%} lower)")

@@ -17,7 +17,7 @@ times factors free of it, the coat ``specular_reflectance`` times its lobe;
 Fresnel linearly; ``blendbsdf``: ``(1 - weight)`` times a ``diffuse`` plus ``weight``
 times a ``roughconductor``, each linear in its colour (``blendbsdf-tir`` likewise, of a
 ``roughplastic`` with ``nonlinear = false`` and a ``roughconductor``: :func:`blend`); ``gltf-pbr``: see
-:data:`PLAUSIBLE_TYPES`; ``tests/conversion/test_mitsuba_fit.py`` checks this affinity
+:data:`PLAUSIBLE_TYPES`; ``tests/conversion/test_convert_mitsuba.py`` checks this affinity
 on Mitsuba at random colours, and that it fails for ``nonlinear = true``).
 So the fit needs Mitsuba only per axis point: the bases are Mitsuba's values
 (:class:`~plausible.analysis.mitsuba_bsdf.MitsubaBSDF`, one launch over the
@@ -322,7 +322,7 @@ def _basis_now(probe: Probe, family: Family, point: dict):
             parts.append([scale * B for B in basis(probe, part, sub)])
         return tuple(np.concatenate([[a[0] + b[0]], a[1:], b[1:]]) for a, b in zip(*parts))
     ch = slice(None) if family.tint else 0           # a tinted family's channels differ: all three kept
-    if family.type == "gltf-pbr":
+    if family.type == "gltf-pbr" and {k for k, _ in family.fixed} | set(point) <= GLTF_COMBINED:
         raw = [probe.reduce(B) for B in _gltf_bases(probe, family, point)]
     else:
         zero = {s: 0.0 for s in family.slots}
@@ -362,6 +362,9 @@ def _gltf_eval(probe, roughness, **kw):
     return np.broadcast_to(f.reshape(len(f), -1), (len(f), 3))
 
 
+#: The glTF parameters :func:`_gltf_bases` combines; a family fixing or searching any other (``viewer``,
+#: anisotropy) is evaluated point by point.
+GLTF_COMBINED = frozenset({"roughness", "metallic", "specular", "specular_color"})
 #: Roughnesses whose glTF parts are kept (:func:`_gltf_parts`): two arrays of the probe's ~100k pairs each,
 #: 1.6 MB a roughness; a conversion's three glTF families visit about 50.
 GLTF_PARTS_CACHE = 48
@@ -398,7 +401,7 @@ def _gltf_bases(probe, family, point):
         f = (1 - m) (f0 S + (s - f0) SW) + m SW + base (m (S - SW) + (1 - m) ((1 - f0m) P - (s - f0m) WP))
 
     (:mod:`plausible.models.gltf_pbr`: ``dielectric_brdf`` and ``metal_brdf`` mixed by ``m``;
-    tests/conversion/test_mitsuba_fit.py holds it to the model's own evaluation)."""
+    tests/conversion/test_convert_mitsuba.py holds it to the model's own evaluation)."""
     p = {**dict(family.fixed), **point}
     sc = np.full(3, float(p.get("specular_color", 1.0)))
     if family.tint:
@@ -694,6 +697,11 @@ class AxesObjective:
         self.least_squares, self.fd_step, self.tol, self.polish = True, AXIS_STEP, AXIS_TOL, AXIS_POLISH
         self.best_x, self.best_value, self.points = None, math.inf, 0
         self.rejected, self.timed_out, self.fd = 0, False, None
+        # each channel's residuals over one constant, the norm of its right-hand side without any basis (the
+        # target's own: ``|g_c|`` for ``l2-cos``), so that the scale does not move with the axes
+        none = (np.zeros((1, len(g))), np.zeros((1, len(A))))
+        self.scale = [math.sqrt(max(float(np.sum(_rows(*none, g[:, c], A[:, c], eps, metric)[1] ** 2)), 1e-300))
+                      for c in range(g.shape[1])]
 
     def point(self, z) -> dict:
         return {a.name: a.inv(float(t)) for a, t in zip(self.fam.axes, z)}
@@ -705,7 +713,9 @@ class AxesObjective:
         x = _lsq(F, Alb, self.g, self.A, self.eps, metric, self.rows if self.hard else None)
         hl = Highlight(H, self.peaks)
         value = _figure(metric, F, Alb, x, self.g, self.A, self.eps, self.rows, self.hard, hl)[0]
-        if self.best_x is None or value < self.best_value - KEEP_RTOL * abs(self.best_value):   # not rounding
+        best = self.best_value
+        if self.best_x is None or (value < best - KEEP_RTOL * abs(best) if math.isfinite(best)
+                                   else not math.isnan(value)):        # a gain beyond rounding
             self.best_x, self.best_value = np.array(z, float), value
         return F, Alb, x, hl, value
 
@@ -719,7 +729,7 @@ class AxesObjective:
             r = []
             for c in range(x.shape[1]):
                 R, rhs = _rows(_ch(F, c), _ch(Alb, c), self.g[:, c], self.A[:, c], self.eps, self.problem.metric)
-                r.append((R @ x[:, c] - rhs) / math.sqrt(max(float(rhs @ rhs), 1e-300)))
+                r.append((R @ x[:, c] - rhs) / self.scale[c])
             r.append(math.sqrt(PEAK_WEIGHT) * hl.excess(x))
             d = np.abs(_predict(Alb, x)[self.rows] - self.A[self.rows]).ravel()
             r.append(math.sqrt(BAND_WEIGHT) * np.maximum(d - BAND, 0.0))
@@ -738,7 +748,7 @@ class AxesObjective:
         a, (lo, hi) = self.fam.axes[k], self.vars[k].bounds
         marks = sorted(a.fwd(v) for v in a.values)
         j = int(np.argmin([abs(m - z[k]) for m in marks]))
-        return (marks[j - 1] if j > 0 else lo), (marks[j + 1] if j + 1 < len(marks) else hi)
+        return (max(lo, marks[j - 1]) if j > 0 else lo), (min(hi, marks[j + 1]) if j + 1 < len(marks) else hi)
 
     def snapped(self, z):
         """``z`` with each axis within :data:`SNAP` of its span from a bound or a grid value (``metallic`` 0,
