@@ -527,6 +527,20 @@ class Highlight:
         return PEAK_WEIGHT * float(np.sum(self.excess(x) ** 2))
 
 
+def _penalty_rows(hl, x, a, A, rows, hard) -> list:
+    """The figure's penalties (:func:`_figure`) as least-squares rows, ``sqrt(weight) excess``: the highlight's
+    log ratios beyond :data:`PEAK_BAND` (``hl`` at colours ``x``; none without ``hl``) and the albedo ``a``'s
+    distance from ``A`` at ``rows`` beyond :data:`BAND` (and :data:`BAND_HARD` where ``hard``; none without
+    ``rows``)."""
+    out = [] if hl is None else [math.sqrt(PEAK_WEIGHT) * hl.excess(x)]
+    if rows is not None:
+        d = np.abs(a[rows] - A[rows]).ravel()
+        out.append(math.sqrt(BAND_WEIGHT) * np.maximum(d - BAND, 0.0))
+        if hard:
+            out.append(math.sqrt(HARD_WEIGHT) * np.maximum(d - BAND_HARD, 0.0))
+    return out
+
+
 def _highlight_cost(hl, x):
     return 0.0 if hl is None else hl.cost(x)
 
@@ -620,14 +634,8 @@ class ColourObjective:
             r = (c - g) / math.sqrt(max(float(np.sum(g * g)), 1e-300))
         else:
             r = M._lr(c, g, self.eps) / math.sqrt(len(g))
-        out = [r]
-        if self.hl is not None:
-            out.append(math.sqrt(PEAK_WEIGHT) * self.hl.excess(z[:, None]))
-        if self.rows is not None and len(a) == len(A):
-            d = np.abs(a[self.rows] - A[self.rows])
-            out.append(math.sqrt(BAND_WEIGHT) * np.maximum(d - BAND, 0.0))
-            if self.hard:
-                out.append(math.sqrt(HARD_WEIGHT) * np.maximum(d - BAND_HARD, 0.0))
+        rows = self.rows if self.rows is not None and len(a) == len(A) else None
+        out = [r] + _penalty_rows(self.hl, z[:, None], a, A, rows, self.hard)
         self(z)                                  # the figure, and the best point by it
         return np.concatenate(out)
 
@@ -730,11 +738,7 @@ class AxesObjective:
             for c in range(x.shape[1]):
                 R, rhs = _rows(_ch(F, c), _ch(Alb, c), self.g[:, c], self.A[:, c], self.eps, self.problem.metric)
                 r.append((R @ x[:, c] - rhs) / self.scale[c])
-            r.append(math.sqrt(PEAK_WEIGHT) * hl.excess(x))
-            d = np.abs(_predict(Alb, x)[self.rows] - self.A[self.rows]).ravel()
-            r.append(math.sqrt(BAND_WEIGHT) * np.maximum(d - BAND, 0.0))
-            if self.hard:
-                r.append(math.sqrt(HARD_WEIGHT) * np.maximum(d - BAND_HARD, 0.0))
+            r += _penalty_rows(hl, x, _predict(Alb, x), self.A, self.rows, self.hard)
             out.append(np.concatenate(r))
         return out
 
@@ -757,19 +761,18 @@ class AxesObjective:
         relative errors and log ratios, 1e-3 of which no one sees): least squares' reflective steps keep inside the bounds, and
         ``metallic`` 1.3e-6 is a dielectric said as a mixture, ``specular`` 0.99998 an extension not needed."""
         z = np.array(z, float)
+        here = None
         for k, v in enumerate(self.vars):
             lo, hi = v.bounds
             for b in v.marks:
                 if 0.0 < abs(z[k] - b) <= SNAP * (hi - lo):
                     t = z.copy()
                     t[k] = b
-                    value, here = self(t), self._figure_at(z)
+                    here = self(z) if here is None else here
+                    value = self(t)
                     if value <= here + SNAP_TOL * max(abs(here), 1.0):
-                        z = t
+                        z, here = t, value
         return z
-
-    def _figure_at(self, z):
-        return self._at(np.asarray(z, float))[-1]
 
 
 # -- the fit ---------------------------------------------------------------------------------------
