@@ -212,6 +212,41 @@ def test_an_interrupted_parallel_run_ends_its_workers_and_leaves_no_partial_fold
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] in (16, 32)   # whole, of one run
 
 
+def test_a_remake_stopped_between_its_two_renames_keeps_the_previous_figure(tmp_path, fake, monkeypatch):
+    """The window a Ctrl-C or a killed worker can hit: the finished figure moved aside,
+    the new one not yet in its place.  Interrupted there, the old folder goes back at
+    once; killed there (nothing runs after), the next run, or the parent of the killed
+    worker, puts it back instead of deleting it as a leftover."""
+    from pathlib import Path
+
+    from plausible.figures.report import _remove_partial
+
+    run(tmp_path, only=[fake], spp=16)
+    rename = Path.rename
+
+    def stop_second(self, target):
+        if ".partial-" in self.name:        # the second rename: the new folder into place
+            raise KeyboardInterrupt
+        return rename(self, target)
+
+    monkeypatch.setattr(Path, "rename", stop_second)
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path, only=[fake], spp=32, force=True)
+    monkeypatch.setattr(Path, "rename", rename)
+    assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+    (tmp_path / fake).rename(tmp_path / f".{fake}.old-12345")      # as a worker killed there leaves it
+    (tmp_path / f".{fake}.partial-abc").mkdir()
+    _remove_partial(tmp_path, fake)
+    assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    (tmp_path / f".{fake}.old-12345").mkdir()                       # moved aside after the new one took its place
+    _remove_partial(tmp_path, fake)
+    assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
 def test_a_follower_is_made_by_the_worker_that_made_its_leader(monkeypatch):
     """figures.report._next: a figure whose albedo curves another one computes first
     (FOLLOWS) waits for it and goes to the worker that made it, which remembers them."""

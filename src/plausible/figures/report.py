@@ -93,18 +93,34 @@ def _cached(d: Path, key: str):
 
 
 def _remove_partial(out: Path, name: str):
-    for p in list(out.glob(f".{name}.partial-*")) + list(out.glob(f".{name}.old-*")):
+    """Tidy what a killed or interrupted run left of figure ``name``: its unfinished
+    ``.NAME.partial-*`` folders are removed; a ``.NAME.old-*`` folder (a finished figure
+    moved aside by :func:`_replace`, which was stopped before the new one took its place)
+    is put back where ``NAME`` is missing, else removed."""
+    for p in out.glob(f".{name}.partial-*"):
         shutil.rmtree(p, ignore_errors=True)
+    for p in sorted(out.glob(f".{name}.old-*")):
+        if not (out / name).exists():
+            p.rename(out / name)
+        else:
+            shutil.rmtree(p, ignore_errors=True)
 
 
 def _replace(tmp: Path, d: Path):
     """Put the finished figure folder ``tmp`` in place of ``d`` (renames only; the
-    old folder is moved aside first, since a rename cannot replace a non-empty one)."""
+    old folder is moved aside first, since a rename cannot replace a non-empty one).
+    Interrupted between the two renames, the old folder goes back; killed there, the
+    next run (or the parent of a killed worker) puts it back (:func:`_remove_partial`)."""
     old = None
     if d.exists():
         old = d.with_name(f".{d.name}.old-{os.getpid()}")
         d.rename(old)
-    tmp.rename(d)
+    try:
+        tmp.rename(d)
+    except BaseException:
+        if old is not None and not d.exists():
+            old.rename(d)
+        raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
 
