@@ -70,14 +70,19 @@ def test_each_family_is_affine_in_its_colours_on_mitsuba(probe, name, point):
     # diffuse weight (the channel mean there instead fails this test: 0.087)
     (CM.gltf_dielectric((1.0, 0.5, 0.2)), {"roughness": 0.2, "specular": 0.7, "specular_color": 25.0})])
 def test_gltf_bases_from_one_evaluation_per_roughness_are_the_models_own_values(probe, fam, point):
-    """The glTF bases are composed from one evaluation per roughness (:func:`CM._gltf_bases`), not
-    evaluated at each point: second method, the registered model at random base colours, per channel."""
-    F, Alb, _ = CM._basis_now(probe, fam, point)
+    """The glTF bases are composed from one evaluation per roughness, reduced (:func:`CM._gltf_parts`,
+    :func:`CM._gltf_combine`), not evaluated at each point: second method, the registered model at random
+    base colours, per channel, on the pairs, as albedos and as the highlight strip's images."""
+    F, Alb, H = CM._basis_now(probe, fam, point)
     for x in np.random.default_rng(7).uniform(0.0, 1.0, (3, 1, 3)):
-        fc, alb, _ = probe.measure_all(CM._load(fam.bsdf_dict(point, {"base_color": x[0]})))
+        fc, alb, h = probe.measure_all(CM._load(fam.bsdf_dict(point, {"base_color": x[0]})))
         np.testing.assert_allclose(CM._predict(F, x), np.broadcast_to(fc, (len(fc), 3)), rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(CM._predict(Alb, x), np.broadcast_to(alb, (len(alb), 3)), rtol=1e-9,
                                    atol=1e-12)
+        want = np.stack(probe.strip.images(np.broadcast_to(h, (len(h), 3))))          # (views, rows, res, 3)
+        for c in range(3):                                         # H: (1 + J[, C], views, rows, res)
+            img = H[0, c] + x[0, c] * H[1, c] if fam.tint else H[0] + x[0, c] * H[1]
+            np.testing.assert_allclose(img, want[..., c], rtol=1e-9, atol=1e-12 * want.max())
 
 
 def test_the_affinity_check_fails_for_roughplastic_with_nonlinear_diffuse(probe):

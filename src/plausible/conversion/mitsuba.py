@@ -321,14 +321,13 @@ def _basis_now(probe: Probe, family: Family, point: dict):
             sub = {k[len(prefix) + 1:]: v for k, v in point.items() if k.startswith(prefix + ".")}
             parts.append([scale * B for B in basis(probe, part, sub)])
         return tuple(np.concatenate([[a[0] + b[0]], a[1:], b[1:]]) for a, b in zip(*parts))
-    ch = slice(None) if family.tint else 0           # a tinted family's channels differ: all three kept
     if family.type == "gltf-pbr" and {k for k, _ in family.fixed} | set(point) <= GLTF_COMBINED:
-        raw = [probe.reduce(B) for B in _gltf_bases(probe, family, point)]
-    else:
-        zero = {s: 0.0 for s in family.slots}
-        raw = [probe.measure_all(_load(family.bsdf_dict(point, zero)))] if family.offset else []
-        raw += [tuple(v - v0 for v, v0 in zip(probe.measure_all(_load(family.bsdf_dict(point, {**zero, s: 1.0}))),
-                                               raw[0] if raw else (0.0, 0.0, 0.0))) for s in family.slots]
+        return _gltf_basis(probe, family, point)
+    ch = slice(None) if family.tint else 0           # a tinted family's channels differ: all three kept
+    zero = {s: 0.0 for s in family.slots}
+    raw = [probe.measure_all(_load(family.bsdf_dict(point, zero)))] if family.offset else []
+    raw += [tuple(v - v0 for v, v0 in zip(probe.measure_all(_load(family.bsdf_dict(point, {**zero, s: 1.0}))),
+                                           raw[0] if raw else (0.0, 0.0, 0.0))) for s in family.slots]
     if not family.offset:
         raw = [(0.0, 0.0, 0.0)] + raw
     c = (3,) if family.tint else ()
@@ -362,24 +361,27 @@ def _gltf_eval(probe, roughness, **kw):
     return np.broadcast_to(f.reshape(len(f), -1), (len(f), 3))
 
 
-#: The glTF parameters :func:`_gltf_bases` combines; a family fixing or searching any other (``viewer``,
+#: The glTF parameters :func:`_gltf_combine` combines; a family fixing or searching any other (``viewer``,
 #: anisotropy) is evaluated point by point.
 GLTF_COMBINED = frozenset({"roughness", "metallic", "specular", "specular_color"})
-#: Roughnesses whose glTF parts are kept (:func:`_gltf_parts`): two arrays of the probe's ~100k pairs each,
-#: 1.6 MB a roughness; a conversion's three glTF families visit about 50.
-GLTF_PARTS_CACHE = 48
+#: Roughnesses whose glTF parts are kept (:func:`_gltf_parts`, reduced: 24 kB a roughness); a conversion's
+#: three glTF families visit about 50.
+GLTF_PARTS_CACHE = 64
 
 
 @lru_cache(maxsize=GLTF_PARTS_CACHE)
 def _gltf_parts(probe_key, roughness: float):
-    """``(S, SW, P, WP)`` of ``gltf-pbr`` at ``roughness`` on the probe's pairs, each an evaluation of the
-    registered model read channel by channel: ``S = Vis D`` and ``SW = Vis D w`` (metallic 1, base colour
-    (1, 0, 0): channels 0 and 1; ``w`` the Fresnel weight ``(1 - V.H)^5``), and, the same at every roughness
-    (:func:`_gltf_diffuse_parts`), ``P = 1/pi`` above the horizon and ``WP = w P``.  Every glTF material of
-    that roughness is a combination of these (:func:`_gltf_bases`): one evaluation per roughness."""
+    """The parts ``S, SW, P, WP`` of ``gltf-pbr`` at ``roughness`` on the probe, each reduced as a basis is
+    (:meth:`Probe.reduce`, the strip as its images): ``(fcos (N,), albedo (T,), images (views, rows, res))``
+    per part.  ``S = Vis D`` and ``SW = Vis D w`` are one evaluation of the registered model read channel by
+    channel (metallic 1, base colour (1, 0, 0): channels 0 and 1; ``w`` the Fresnel weight ``(1 - V.H)^5``);
+    ``P = 1/pi`` above the horizon and ``WP = w P`` are the same at every roughness
+    (:func:`_gltf_diffuse_parts`).  Every glTF material of that roughness is a combination of these
+    (:func:`_gltf_combine`), and reduction is linear: one evaluation per roughness, and a point of the
+    metallic and KHR_materials_specular axes combines arrays of the reduced size (a 20th of the pairs')."""
     probe = _PROBES[probe_key]
     f = _gltf_eval(probe, roughness, metallic=1.0, base_color=[1.0, 0.0, 0.0])
-    return (f[:, 0], f[:, 1]) + _gltf_diffuse_parts(probe_key)
+    return tuple(_reduced(probe, x) for x in (f[:, 0], f[:, 1])) + _gltf_diffuse_parts(probe_key)
 
 
 @lru_cache(maxsize=16)
@@ -389,14 +391,23 @@ def _gltf_diffuse_parts(probe_key):
     probe = _PROBES[probe_key]
     P = _gltf_eval(probe, 0.5, metallic=0.0, specular=0.0, base_color=1.0)[:, 0]
     SW = _gltf_eval(probe, 0.5, metallic=1.0, base_color=0.0)[:, 0]
-    return P, SW + P - _gltf_eval(probe, 0.5, metallic=0.0, specular=1.0, specular_color=0.0, base_color=1.0)[:, 0]
+    return _reduced(probe, P), _reduced(probe, SW + P - _gltf_eval(probe, 0.5, metallic=0.0, specular=1.0,
+                                                                     specular_color=0.0, base_color=1.0)[:, 0])
 
 
-def _gltf_bases(probe, family, point):
-    """``gltf-pbr``'s values at base colour 0 and the change from 0 to 1 (per channel, (N, 3)) at ``point``,
-    exact, from :func:`_gltf_parts` of its roughness (so a family's metallic and KHR_materials_specular axes
-    cost no evaluation): with ``m`` metallic, ``s`` specular, ``f0 = min(0.04 specular_color, 1) s`` per
-    channel and ``f0m`` the same of the largest channel (the specification's ``max_value``),
+def _reduced(probe, f):
+    """``(fcos (N,), albedo (T,), images (views, rows, res))`` of one channel's values ``f`` on the probe's
+    pairs (:meth:`Probe.reduce`; the strip as :meth:`LampStrip.images`)."""
+    fcos, alb, h = probe.reduce(f)
+    return fcos[:, 0], alb[:, 0], np.stack(probe.strip.images(h))[..., 0]
+
+
+def _gltf_combine(parts, family, point):
+    """``gltf-pbr``'s values at base colour 0, ``B0`` (per channel, ``(..., 3)``), and their change from
+    base colour 0 to 1, ``B1`` (``(...)``), at ``point``, exactly, from the parts ``S, SW, P, WP`` (any one
+    shape: the values on pairs, or reduced, :func:`_gltf_parts`): with ``m`` metallic, ``s`` specular,
+    ``f0 = min(0.04 specular_color, 1) s`` per channel and ``f0m`` the same of the largest channel (the
+    specification's ``max_value``),
 
         f = (1 - m) (f0 S + (s - f0) SW) + m SW + base (m (S - SW) + (1 - m) ((1 - f0m) P - (s - f0m) WP))
 
@@ -407,13 +418,30 @@ def _gltf_bases(probe, family, point):
     if family.tint:
         sc = sc * np.asarray(family.tint[1], float)
     m, s = float(p.get("metallic", 0.0)), float(p.get("specular", 1.0))
-    _PROBES.setdefault(probe.key, probe)
-    S, SW, P, WP = _gltf_parts(probe.key, float(p["roughness"]))
+    S, SW, P, WP = parts
     f0 = np.minimum(0.04 * sc, 1.0) * s
     f0m = float(np.minimum(0.04 * sc.max(), 1.0) * s)
-    B0 = (1.0 - m) * (S[:, None] * f0 + SW[:, None] * (s - f0)) + m * SW[:, None]
+    B0 = (1.0 - m) * (S[..., None] * f0 + SW[..., None] * (s - f0)) + m * SW[..., None]
     B1 = m * (S - SW) + (1.0 - m) * ((1.0 - f0m) * P - (s - f0m) * WP)
-    return B0, np.broadcast_to(B1[:, None], B0.shape)
+    return B0, B1
+
+
+def _gltf_basis(probe, family, point):
+    """:func:`_basis_now` of a ``gltf-pbr`` family: its two bases (base colour 0, and the change to 1)
+    combined from the reduced parts of its roughness (:func:`_gltf_parts`, :func:`_gltf_combine`) in the
+    shapes of the Mitsuba families' (a tinted family's three channels, else channel 0)."""
+    _PROBES.setdefault(probe.key, probe)
+    parts = _gltf_parts(probe.key, float({**dict(family.fixed), **point}["roughness"]))
+    out = []
+    for k in range(3):                                  # f cos, albedo, images
+        B0, B1 = _gltf_combine([q[k] for q in parts], family, point)
+        if family.tint:
+            out.append(np.stack([B0, np.broadcast_to(B1[..., None], B0.shape)]))
+        else:
+            out.append(np.stack([B0[..., 0], B1]))
+    if family.tint:                                     # images (1 + J, C, views, rows, res)
+        out[2] = np.moveaxis(out[2], -1, 1)
+    return tuple(out)
 
 
 # -- the colours at one point ---------------------------------------------------------------------
