@@ -544,7 +544,7 @@ class Highlight:
         else:
             y = x @ self.w if x.shape[1] == len(self.w) else x.mean(axis=1) * self.w.sum()
             lum = self.images[0] * self.w.sum() + np.tensordot(y, self.images[1:], 1)
-        got = np.array([_window_max(v) for v in lum])
+        got = _window_max(lum)
         return np.maximum(got, PEAK_FLOOR) / np.maximum(self.peaks, PEAK_FLOOR)
 
     def excess(self, x):

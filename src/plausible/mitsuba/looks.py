@@ -234,13 +234,17 @@ def _published(x):
     return (name, fit) if same else None
 
 
-def _window_max(y: np.ndarray, w: int | None = None) -> float:
-    """The largest mean of ``y`` over a ``w`` x ``w`` window inside the image."""
+def _window_max(y: np.ndarray, w: int | None = None):
+    """The largest mean of ``y`` over a ``w`` x ``w`` window inside the image: a float for one image
+    (H, W), an array of one per image for a stack (..., H, W) (filtered in one call)."""
     from scipy.ndimage import uniform_filter
 
     w = PEAK_WINDOW if w is None else w
     h = w // 2
-    return float(np.max(uniform_filter(np.asarray(y, np.float64), size=w, mode="constant")[h:-h or None, h:-h or None]))
+    y = np.asarray(y, np.float64)
+    size = (1,) * (y.ndim - 2) + (w, w)
+    m = uniform_filter(y, size=size, mode="constant")[..., h:-h or None, h:-h or None]
+    return float(np.max(m)) if y.ndim == 2 else np.max(m, axis=(-2, -1))
 
 
 def _times(a, b):
@@ -442,7 +446,7 @@ class LampStrip:
 
     def peaks(self, f) -> np.ndarray:
         """The peak of each view (luminance of a colour image; a grey one as it is)."""
-        return np.array([_window_max(luminance(im)) for im in self.images(f)])
+        return _window_max(np.stack([luminance(im) for im in self.images(f)]))
 
     def of(self, model) -> np.ndarray:
         """:meth:`peaks` of a contract object (``eval(wi, wo)``)."""
