@@ -475,3 +475,21 @@ def test_the_axes_are_searched_by_the_fitters_optimiser(monkeypatch):
     assert all(abs(v - 0.22) > 0.03 for v in CM.ALPHA.values)
     assert r.point["alpha"] == pytest.approx(0.22, rel=0.01)
     np.testing.assert_allclose(r.colours["specular_reflectance"], [0.9, 0.6, 0.3], atol=1e-3)
+
+
+def test_the_probes_kept_for_the_cached_bases_are_bounded():
+    """A table of many sources keeps at most PROBES_KEPT probes (5 MB each), the most recently used:
+    the dict grew by one per new probe before."""
+    from types import SimpleNamespace
+
+    saved = list(CM._PROBES.items())
+    try:
+        for k in range(CM.PROBES_KEPT + 5):
+            CM._keep_probe(SimpleNamespace(key=("test", k)))
+        CM._keep_probe(SimpleNamespace(key=("test", 6)))                # used again: kept over older ones
+        CM._keep_probe(SimpleNamespace(key=("test", "new")))
+        assert len(CM._PROBES) == CM.PROBES_KEPT
+        assert ("test", 6) in CM._PROBES and ("test", "new") in CM._PROBES and ("test", 5) not in CM._PROBES
+    finally:
+        CM._PROBES.clear()
+        CM._PROBES.update(saved)

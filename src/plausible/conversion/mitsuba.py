@@ -54,6 +54,7 @@ With ``hard=True`` the albedo band is a constraint of steps 2-4 (:data:`BAND_HAR
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -301,12 +302,30 @@ def model_params(d: dict) -> dict:
     return {k: (v["value"] if isinstance(v, dict) else v) for k, v in d.items() if k != "type"}
 
 
-@lru_cache(maxsize=4096)
+#: Bases kept (:func:`basis`): 60-230 kB each (a tinted family's three channels on the ~4,800 pairs), so at
+#: most about 250 MB; a conversion visits 300-500 points (a Mitsuba conversion's four families), and a
+#: table of many materials went 4096 entries (about 1 GB) before.
+BASES_KEPT = 1024
+
+
+@lru_cache(maxsize=BASES_KEPT)
 def _basis_cached(probe_key, family: Family, point: tuple):
     return _basis_now(_PROBES[probe_key], family, dict(point))
 
 
-_PROBES: dict = {}
+#: The probes of the cached bases, by key, the most recently used last; at most :data:`PROBES_KEPT` (each
+#: holds ~100k pairs, 5 MB; published fits share a few, a table of other sources may bring one each).
+_PROBES: OrderedDict = OrderedDict()
+PROBES_KEPT = 16
+
+
+def _keep_probe(probe):
+    """Put ``probe`` in :data:`_PROBES` (the cached functions name it by key), forgetting the least
+    recently used beyond :data:`PROBES_KEPT`."""
+    _PROBES[probe.key] = probe
+    _PROBES.move_to_end(probe.key)
+    while len(_PROBES) > PROBES_KEPT:
+        _PROBES.popitem(last=False)
 
 
 def _basis_now(probe: Probe, family: Family, point: dict):
@@ -349,7 +368,7 @@ def _basis_now(probe: Probe, family: Family, point: dict):
 
 def basis(probe: Probe, family: Family, point: dict):
     """The bases of ``family`` at ``point`` on ``probe`` (cached)."""
-    _PROBES.setdefault(probe.key, probe)
+    _keep_probe(probe)
     return _basis_cached(probe.key, family, tuple(sorted(point.items())))
 
 
@@ -430,7 +449,7 @@ def _gltf_basis(probe, family, point):
     """:func:`_basis_now` of a ``gltf-pbr`` family: its two bases (base colour 0, and the change to 1)
     combined from the reduced parts of its roughness (:func:`_gltf_parts`, :func:`_gltf_combine`) in the
     shapes of the Mitsuba families' (a tinted family's three channels, else channel 0)."""
-    _PROBES.setdefault(probe.key, probe)
+    _keep_probe(probe)
     parts = _gltf_parts(probe.key, float({**dict(family.fixed), **point}["roughness"]))
     out = []
     for k in range(3):                                  # f cos, albedo, images
