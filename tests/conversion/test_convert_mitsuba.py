@@ -85,6 +85,37 @@ def test_gltf_bases_from_one_evaluation_per_roughness_are_the_models_own_values(
             np.testing.assert_allclose(img, want[..., c], rtol=1e-9, atol=1e-12 * want.max())
 
 
+def _linear_gap(probe, fam, point, name):
+    """Largest |Mitsuba at ``point`` - the mix of Mitsuba at the axis ``name``'s two bounds| over the bases
+    (pairs, albedos, strip images), relative to each one's largest value: every basis evaluated directly."""
+    from dataclasses import replace
+
+    direct = replace(fam, linear=())
+    a = next(x for x in fam.axes if x.name == name)
+    w = (point[name] - a.lo) / (a.hi - a.lo)
+    here, lo, hi = (CM._basis_now(probe, direct, {**point, name: v}) for v in (point[name], a.lo, a.hi))
+    return max(float(np.max(np.abs(b - ((1 - w) * x + w * y))) / np.max(np.abs(b))) for b, x, y in zip(here, lo, hi))
+
+
+@pytest.mark.parametrize("point", [{"roughness": 0.06, "metallic": 0.25}, {"roughness": 0.3, "metallic": 0.6},
+                                   {"roughness": 1.0, "metallic": 0.9}])
+def test_principled_is_affine_in_metallic_on_mitsuba_and_its_bases_mix_the_bounds(probe, point):
+    """``principled``'s metallic axis costs no evaluation (``Family.linear``): Mitsuba's values at a metallic
+    are the mix of those at 0 and 1 (to float32 rounding), and the family's bases are that mix."""
+    fam = CM.FAMILIES["principled"]
+    assert fam.linear == ("metallic",)
+    assert _linear_gap(probe, fam, point, "metallic") < 1e-6
+    mixed = CM._basis_now(probe, fam, point)
+    lo, hi = (CM._basis_now(probe, fam, {**point, "metallic": v}) for v in (0.0, 1.0))
+    for b, x, y in zip(mixed, lo, hi):
+        np.testing.assert_allclose(b, (1 - point["metallic"]) * x + point["metallic"] * y, rtol=1e-12, atol=1e-15)
+
+
+def test_the_linearity_check_fails_for_an_axis_that_is_not_affine(probe):
+    # roughness moves the lobe: its bases are far from the mix of its bounds'
+    assert _linear_gap(probe, CM.FAMILIES["principled"], {"roughness": 0.3, "metallic": 0.5}, "roughness") > 1e-2
+
+
 def test_the_affinity_check_fails_for_roughplastic_with_nonlinear_diffuse(probe):
     # nonlinear=true divides by 1 - diffuse_reflectance * fdr: not affine in the colour
     assert _affine_gap(probe, _family("roughplastic", nonlinear=True), {"alpha": 0.3}) > 1e-2

@@ -118,6 +118,11 @@ class Family:
     #: ``(axis name, (r, g, b))``: that axis's value times this colour is the entry (a lobe's tint on a grey
     #: level, :func:`gltf_dielectric`); the channels' bases then differ and are kept apart (:func:`_basis_now`).
     tint: tuple = ()
+    #: Axes in which the plugin's values are affine (``principled``'s ``metallic``: its diffuse weight
+    #: ``1 - metallic`` and its Fresnel a mix of the dielectric's and the metal's by ``metallic``): a point's
+    #: bases are those at the axis's two bounds, mixed (:func:`_basis_now`), so the axis costs no evaluation.
+    #: tests/conversion/test_convert_mitsuba.py holds Mitsuba to it (2e-7 of the largest value, float32).
+    linear: tuple = ()
 
     def bsdf_dict(self, point: dict, colours: dict) -> dict:
         """The ``mi.load_dict`` description at axis values ``point`` and slot colours
@@ -216,7 +221,7 @@ FAMILIES = {
     "principled": Family("principled", (),
                          (Axis("roughness", tuple(float(x) for x in np.geomspace(0.06, 1.0, 8)), 0.045, 1.0),
                           Axis("metallic", (0.0, 0.25, 0.5, 0.75, 1.0), 0.0, 1.0, log=False)),
-                         ("base_color",), offset=True),
+                         ("base_color",), offset=True, linear=("metallic",)),
 }
 
 
@@ -340,6 +345,11 @@ def _basis_now(probe: Probe, family: Family, point: dict):
             sub = {k[len(prefix) + 1:]: v for k, v in point.items() if k.startswith(prefix + ".")}
             parts.append([scale * B for B in basis(probe, part, sub)])
         return tuple(np.concatenate([[a[0] + b[0]], a[1:], b[1:]]) for a, b in zip(*parts))
+    for a in family.axes:       # an affine axis between its bounds: the bases at the two bounds, mixed
+        if a.name in family.linear and a.lo < float(point[a.name]) < a.hi:
+            w = (float(point[a.name]) - a.lo) / (a.hi - a.lo)
+            lo, hi = (basis(probe, family, {**point, a.name: v}) for v in (a.lo, a.hi))
+            return tuple((1.0 - w) * x + w * y for x, y in zip(lo, hi))
     if family.type == "gltf-pbr" and {k for k, _ in family.fixed} | set(point) <= GLTF_COMBINED:
         return _gltf_basis(probe, family, point)
     ch = slice(None) if family.tint else 0           # a tinted family's channels differ: all three kept
