@@ -236,15 +236,34 @@ def test_a_remake_stopped_between_its_two_renames_keeps_the_previous_figure(tmp_
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
-    (tmp_path / fake).rename(tmp_path / f".{fake}.old-12345")      # as a worker killed there leaves it
+    dead = 2 ** 31 - 1                                              # above any pid_max: no such process
+    (tmp_path / fake).rename(tmp_path / f".{fake}.old-{dead}")     # as a worker killed there leaves it
     (tmp_path / f".{fake}.partial-abc").mkdir()
     _remove_partial(tmp_path, fake)
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
-    (tmp_path / f".{fake}.old-12345").mkdir()                       # moved aside after the new one took its place
+    (tmp_path / f".{fake}.old-{dead}").mkdir()                      # moved aside after the new one took its place
     _remove_partial(tmp_path, fake)
     assert json.loads((tmp_path / fake / "figure.json").read_text())["spp"] == 16
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_a_figure_a_killed_run_moved_aside_is_found_by_the_next_run_and_a_live_runs_is_left_to_it(tmp_path, fake):
+    """The next run puts a killed run's ``.NAME.old-PID`` back before its cache check (the figure is
+    cached, not remade, and in index.html); a ``.old-`` folder of a process that still runs is that
+    process's (between its two renames now) and is neither put back nor removed."""
+    from plausible.figures.report import _remove_partial
+
+    run(tmp_path, only=[fake], spp=16)
+    made = json.loads((tmp_path / fake / "figure.json").read_text())
+    (tmp_path / fake).rename(tmp_path / f".{fake}.old-{2 ** 31 - 1}")
+    res = run(tmp_path, only=[fake], spp=16)
+    assert res[fake]["cached"] and res[fake]["seconds"] == made["seconds"]
+    assert f'{fake}/' in (tmp_path / "index.html").read_text()
+    live = tmp_path / f".{fake}.old-{os.getppid()}"
+    (tmp_path / fake).rename(live)
+    _remove_partial(tmp_path, fake)
+    assert live.exists() and not (tmp_path / fake).exists()
 
 
 def test_a_follower_is_made_by_the_worker_that_made_its_leader(monkeypatch):

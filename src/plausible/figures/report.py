@@ -94,16 +94,42 @@ def _cached(d: Path, key: str):
 
 def _remove_partial(out: Path, name: str):
     """Tidy what a killed or interrupted run left of figure ``name``: its unfinished
-    ``.NAME.partial-*`` folders are removed; a ``.NAME.old-*`` folder (a finished figure
-    moved aside by :func:`_replace`, which was stopped before the new one took its place)
-    is put back where ``NAME`` is missing, else removed."""
+    ``.NAME.partial-*`` folders are removed, and its previous figure put back
+    (:func:`_restore_old`)."""
     for p in out.glob(f".{name}.partial-*"):
         shutil.rmtree(p, ignore_errors=True)
+    _restore_old(out, name)
+
+
+def _restore_old(out: Path, name: str):
+    """A ``.NAME.old-PID`` folder is a finished figure that :func:`_replace` of process PID moved
+    aside and did not replace (it was killed between its two renames): put it back where ``NAME``
+    is missing, else remove it.  One whose process still runs (another run on the same folder, in
+    that window now) is left to it."""
     for p in sorted(out.glob(f".{name}.old-*")):
+        pid = p.name.rsplit("-", 1)[1]
+        if pid.isdigit() and int(pid) != os.getpid() and _alive(int(pid)):
+            continue
         if not (out / name).exists():
-            p.rename(out / name)
-        else:
-            shutil.rmtree(p, ignore_errors=True)
+            try:
+                p.rename(out / name)
+                continue
+            except OSError:         # NAME appeared meanwhile: this one is the older
+                pass
+        shutil.rmtree(p, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (a signal 0 is delivered, or refused for permission)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except OverflowError:
+        return False
+    return True
 
 
 def _replace(tmp: Path, d: Path):
@@ -227,6 +253,7 @@ def run(out, *, only=None, spp=None, resolution=None, quick=False, force=False, 
             make = []
             for name in todo:
                 key = input_key(FIGURES[name], resolution=resolution, spp=spp, quick=quick, src=src)
+                _restore_old(out, name)         # a figure a killed run moved aside is still this folder's
                 m = None if force else _cached(out / name, key)
                 if m is not None:
                     m["cached"] = True
