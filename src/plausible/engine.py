@@ -121,10 +121,12 @@ def me() -> dict:
     return dict(host=socket.gethostname(), pid=os.getpid(), start=_start_time(os.getpid()), boot=_boot_id())
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this host (signal 0 delivered, or refused for permission:
+    alive, another user's); a number no process can have (beyond the platform's PID type) is not."""
     try:
         os.kill(pid, 0)
-    except ProcessLookupError:
+    except (ProcessLookupError, OverflowError):
         return False
     except PermissionError:          # alive, another user's
         return True
@@ -147,7 +149,7 @@ def judge(who) -> str | None:
         return None
     if here["boot"] and who.get("boot") and who["boot"] != here["boot"]:
         return "written before this machine restarted"
-    if who["pid"] <= 0 or not _alive(who["pid"]):
+    if who["pid"] <= 0 or not process_alive(who["pid"]):
         return f"process {who['pid']} is gone"
     if _start_time(who["pid"]) is not None and who.get("start") != _start_time(who["pid"]):
         return f"process {who['pid']} is not the one that claimed it (another start time)"

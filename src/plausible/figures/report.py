@@ -31,6 +31,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from ..analysis.suite import usable_cores
+from ..engine import process_alive
 from ..integrals.albedo import remembering
 from ..progress import start
 from ..text import fmt
@@ -108,7 +109,7 @@ def _restore_old(out: Path, name: str):
     that window now) is left to it."""
     for p in sorted(out.glob(f".{name}.old-*")):
         pid = p.name.rsplit("-", 1)[1]
-        if pid.isdigit() and int(pid) != os.getpid() and _alive(int(pid)):
+        if pid.isdigit() and int(pid) != os.getpid() and process_alive(int(pid)):
             continue
         if not (out / name).exists():
             try:
@@ -117,19 +118,6 @@ def _restore_old(out: Path, name: str):
             except OSError:         # NAME appeared meanwhile: this one is the older
                 pass
         shutil.rmtree(p, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    """Whether process ``pid`` exists (a signal 0 is delivered, or refused for permission)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    except OverflowError:
-        return False
-    return True
 
 
 def _replace(tmp: Path, d: Path):

@@ -122,7 +122,7 @@ class Renders:
         """The peak of each view's light image: the largest mean luminance over a window of
         :data:`PEAK_WINDOW` x :data:`PEAK_WINDOW` pixels (the highlight's energy near its
         centre, which does not depend on where the pixel grid cuts a highlight of a few pixels)."""
-        return np.array([_window_max(luminance(self.view(k, "light"))) for k in range(len(self.angles))])
+        return _window_max(np.stack([luminance(self.view(k, "light")) for k in range(len(self.angles))]))
 
     def __add__(self, other):
         return Renders(self.env + other.env, self.light + other.light, self.angles)
