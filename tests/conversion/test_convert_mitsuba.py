@@ -249,12 +249,16 @@ def test_the_xml_fragment_loads_each_bsdf_by_its_id(tmp_path):
 
 
 def test_textures_of_an_mtl_are_carried_into_the_mitsuba_dict(tmp_path):
-    (tmp_path / "lib.mtl").write_text("newmtl t\nKd 0.5 0.5 0.5\nillum 1\nmap_Kd wood.png\nmap_bump b.png\n")
+    (tmp_path / "lib.mtl").write_text("newmtl t\nKd 0.5 0.5 0.5\nillum 1\nmap_Kd wood.png\nmap_Bump b.png\n"
+                                      "map_Ke glow.png\nmap_Ka amb.png\n")
     c = convert(str(tmp_path / "lib.mtl")).items[0]
     assert c.params["reflectance"] == {"type": "bitmap", "filename": "wood.png"}
-    assert c.textures == {"map_Kd": "wood.png", "map_bump": "b.png"}
-    # a bump map dropped is a warning (issue 41: a note before)
-    assert any("map_bump b.png: dropped, carried by reference only" in w for w in c.warnings)
+    assert c.textures == {"map_Kd": "wood.png", "map_bump": "b.png", "map_Ke": "glow.png", "map_Ka": "amb.png"}
+    # a bump map dropped is a warning (issue 41: a note before), in Blender's spelling too, and so is an
+    # emission map (a note before: an outside run of real files); the ambient map is not a reflector's
+    for stmt, file in (("map_bump", "b.png"), ("map_Ke", "glow.png")):
+        assert any(f"{stmt} {file}: dropped, carried by reference only" in w for w in c.warnings)
+    assert not any("amb.png" in w for w in c.warnings) and any("map_Ka amb.png: dropped" in n for n in c.notes)
 
 
 @pytest.mark.parametrize("to, words", [("mitsuba:plastic", "mitsuba:roughconductor"),

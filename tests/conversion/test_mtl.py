@@ -142,8 +142,80 @@ def test_a_missing_file_and_a_file_without_materials_are_refused(tmp_path):
         read_mtl(tmp_path / "none.mtl")
     with pytest.raises(ValueError, match="no newmtl"):
         read_mtl(write(tmp_path, "# empty\n"))
-    with pytest.raises(ValueError, match="before the first newmtl"):
+    with pytest.raises(ValueError, match="no newmtl"):       # a statement but no material
         read_mtl(write(tmp_path, "Kd 0.5 0.5 0.5\n"))
+
+
+# What real exporters write beside the specification is read, with a note or a warning, not refused
+# (an outside run of 37 real files: Mineways' title line, Tinkercad's "illum 0.0", a Cinema 4D "Ni -1"
+# and a name defined twice each refused the whole file before).
+def test_a_title_line_before_the_first_newmtl_is_noted_and_a_statement_there_warned(tmp_path):
+    a, b = read_mtl(write(tmp_path, "Wavefront OBJ material file\nKd 0.2 0.2 0.2\nnewmtl a\nKd 0.5 0.5 0.5\n"
+                                    "newmtl b\nKd 0.1 0.1 0.1\n"))
+    assert (a.name, b.name, a.Kd.tolist()) == ("a", "b", [0.5, 0.5, 0.5])
+    assert any("line 1: 'Wavefront OBJ material file' before the first newmtl" in n for n in a.notes)
+    assert any("line 2: 'Kd 0.2 0.2 0.2' before the first newmtl belongs to no material" in w for w in a.warnings)
+
+
+def test_a_material_defined_twice_keeps_the_first_and_warns(tmp_path):
+    ms = read_mtl(write(tmp_path, "newmtl A\nKd 0.5 0.5 0.5\nnewmtl B\nKd 0.1 0.2 0.3\nnewmtl A\nKd 0.9 0 0\n"))
+    assert [m.name for m in ms] == ["A", "B"] and ms[0].Kd.tolist() == [0.5, 0.5, 0.5]
+    assert any("'A' is defined again at line 5" in w for w in ms[0].warnings) and not ms[1].warnings
+    with pytest.raises(ValueError, match=r"lib.mtl:6 \(material 'A'\): Kd must be"):   # its values still checked
+        read_mtl(write(tmp_path, "newmtl A\nKd 0.5 0.5 0.5\nnewmtl B\nKd 0.1 0.2 0.3\nnewmtl A\nKd 2 0 0\n"))
+
+
+@pytest.mark.parametrize("line, illum", [("illum 0.0", 0), ("illum 2.000000", 2), ("ILLUM 1", 1)])
+def test_illum_written_as_a_whole_float_or_in_another_case_is_read(tmp_path, line, illum):
+    assert read_mtl(write(tmp_path, f"newmtl m\n{line}\n"))[0].illum == illum
+
+
+def test_illum_that_is_not_whole_is_still_refused(tmp_path):
+    with pytest.raises(ValueError, match="illum must be one integer"):
+        read_mtl(write(tmp_path, "newmtl m\nillum 2.5\n"))
+
+
+def test_ni_outside_its_range_is_noted_and_on_glass_replaced_with_a_warning(tmp_path):
+    opaque, glass, air = read_mtl(write(tmp_path, "newmtl o\nKd 0.5 0.5 0.5\nNi -1.000000\nillum 2\n"
+                                                  "newmtl g\nNi -1\nillum 7\nnewmtl a\nNi 1.0\nillum 4\n"))
+    assert any("Ni -1 is outside the specification's range" in n for n in opaque.notes) and not opaque.warnings
+    from plausible.conversion.mtl import reading
+    assert not reading(opaque).warnings
+    r = reading(glass)
+    assert r.surface["ior"] == 1.5 and any("Ni -1 (below 1)" in w for w in r.warnings)
+    r = reading(air)        # Ni 1: an invisible glass (Sibenik's windows, Blender's glass)
+    assert r.surface["ior"] == 1.5 and any("Ni 1 (the index of air" in w for w in r.warnings)
+    for bad in ("glass", "12"):
+        with pytest.raises(ValueError, match=r"Ni must be one number in \[0, 10\]"):
+            read_mtl(write(tmp_path, f"newmtl m\nNi {bad}\n"))
+
+
+def test_statements_in_another_case_are_read_as_the_specification_spells_them(tmp_path):
+    (m,) = read_mtl(write(tmp_path, "newmtl m\nkd 0.5 0.25 0.1\nNS 20\nmap_kd wood.png\nmap_Bump -bm 0.5 n.png\n"))
+    assert m.Kd.tolist() == [0.5, 0.25, 0.1] and m.Ns == 20.0
+    assert m.textures == {"map_Kd": "wood.png", "map_bump": "-bm 0.5 n.png"}
+
+
+def test_the_pbr_extension_statements_are_warned_as_not_read(tmp_path):
+    (m,) = read_mtl(write(tmp_path, "newmtl m\nKd 0.8 0.8 0.8\nPr 0.4\nPm 0.9\naniso 0.2\n"))
+    got = " ".join(m.warnings)
+    for words in ("Pr 0.4 (MTL's physically based extension: roughness) is not read", "Pm 0.9", "aniso 0.2"):
+        assert words in got
+
+
+@pytest.mark.parametrize("words, name", [
+    ("-s 1 1 1 my wood.png", "my wood.png"),
+    ("-colorspace sRGB -o 0.1 diffuse.jpg", "diffuse.jpg"),       # tinyobjloader's option
+    ("-imgchan b x.png", "x.png"),                                 # Blender's spelling, not in the table
+    ("-imfchan r bumpmap2.jpg -bm 1.5", "bumpmap2.jpg"),           # an option after the name
+    ("-clamp on tex.tga -s 2 2", "tex.tga"),
+    ("-unknown 3 4 a b.png", "a b.png"),
+    ("a -b.png", "a -b.png"),
+    ("-bm 0.5", ""),
+])
+def test_a_texture_statements_file_name_is_what_its_options_leave(words, name):
+    from plausible.conversion.mtl import texture_file
+    assert texture_file(words.split()) == name
 
 
 @pytest.mark.parametrize("data, name, note", [

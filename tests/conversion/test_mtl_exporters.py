@@ -360,3 +360,15 @@ def test_the_image_error_decides_the_metallic_where_it_can_be_rendered(monkeypat
     assert "image error" in notes[0]
     flips[0.3] = 0.10                   # half the better end's: the fraction is kept
     assert C.metallic_decision("source", r, "perceptual", None, None, []).dict["metallic"] == 0.3
+
+
+def test_the_textures_of_glass_are_warned_where_they_are_dropped(tmp_path):
+    # before, glass never went through the texture reading: its maps vanished with neither note nor warning
+    p = write(tmp_path, "newmtl window\nKd 0.5 0.5 0.5\nNi 1.45\nillum 4\nd 0.75\nmap_Kd glass.png\n"
+                        "map_Bump -bm 0.2 glass_n.png\n", "glass.mtl")
+    (m,) = convert(str(p), to="mitsuba").items
+    assert m.result == {"type": "thindielectric", "int_ior": 1.45, "ext_ior": 1.0}
+    assert sorted(w.split(":")[0] for w in m.warnings) == ["map_Kd glass.png", "map_bump glass_n.png"]
+    (g,) = convert(str(p), to="gltf").items
+    assert [w.split(":")[0] for w in g.warnings] == ["map_bump glass_n.png"]
+    assert any(n.startswith("map_Kd glass.png: the glass's baseColorTexture") for n in g.notes)

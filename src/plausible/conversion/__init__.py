@@ -493,19 +493,29 @@ def _glass(src, to: str) -> Converted:
     (glTF tints the transmission by it); not fitted (no error figures, no albedo)."""
     from .. import registry
 
+    from .mtl import NOTED_TEXTURES
+
     sf = src.surface
     notes = list(src.notes) + ["glass: converted by its statements, not fitted (no error figures)"]
+    warnings = list(src.warnings)
+    for stmt, value in src.textures.items():
+        if to in GLTF_SHAPED and stmt in GLTF_TEXTURE_SLOTS:
+            notes.append(f"{stmt} {value}: the glass's {GLTF_TEXTURE_SLOTS[stmt]} (glTF tints the transmission by "
+                         f"the base colour)")
+        else:
+            (notes if stmt in NOTED_TEXTURES else warnings).append(
+                f"{stmt} {value}: dropped, carried by reference only (glass is converted by its Ni and Tf)")
     if to in GLTF_SHAPED:
         params = {"base_color": sf["transmittance"], "metallic": 0.0, "roughness": 0.01}
         notes.append("glTF: KHR_materials_transmission 1 and KHR_materials_ior; roughness 0.01 (the model's "
                      "smallest), thin-walled (no KHR_materials_volume: the thickness of a mesh is unknown here)")
-        return Converted(src.name, src.spec, "gltf", params, {}, {}, list(src.warnings), notes, dict(src.textures),
+        return Converted(src.name, src.spec, "gltf", params, {}, {}, warnings, notes, dict(src.textures),
                          registry.make(GLTF_MODEL, **params), src.folder,
                          {"transmission": 1.0, "ior": float(sf["ior"])})
     d = {"type": sf["glass"], "int_ior": float(sf["ior"]), "ext_ior": 1.0}
     if any(x != 1.0 for x in sf["transmittance"]):
         d["specular_transmittance"] = {"type": "rgb", "value": list(sf["transmittance"])}
-    return Converted(src.name, src.spec, f"mitsuba:{sf['glass']}", d, {}, {}, list(src.warnings), notes,
+    return Converted(src.name, src.spec, f"mitsuba:{sf['glass']}", d, {}, {}, warnings, notes,
                      dict(src.textures), d, src.folder)
 
 
@@ -803,14 +813,14 @@ TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_r
 def _with_textures(d, family, textures, notes, warn):
     """``(dict, bakes)``: ``d`` with its slots' bitmaps (:data:`TEXTURE_SLOTS`) and the bakes ``Kd x
     map_Kd`` (:attr:`Converted.bakes`: slot -> (statement, fitted colour)); a texture no slot takes is
-    noted, or a warning where a user sees it go (:data:`plausible.conversion.mtl.WARNED_TEXTURES`)."""
+    a warning (a user sees it go), or noted (:data:`plausible.conversion.mtl.NOTED_TEXTURES`)."""
     import copy
 
     from . import mitsuba as CM
-    from .mtl import WARNED_TEXTURES
+    from .mtl import NOTED_TEXTURES
 
     def dropped(stmt, where):
-        (warn if stmt in WARNED_TEXTURES else notes).append(
+        (notes if stmt in NOTED_TEXTURES else warn).append(
             f"{stmt} {textures[stmt]}: dropped, carried by reference only (no {where} takes it)")
 
     bakes = {}

@@ -62,7 +62,9 @@ gives the reasons):
 Defaults where a statement is missing: ``Kd = Ks = 0``, ``Ns = 0``, ``illum 2`` (each noted);
 ``Kd`` missing beside a ``map_Kd`` is 1 (the map is the colour: Blender 4 writes no ``Kd`` then).
 A bad value raises ValueError naming the file, the line, the material and the statement, with the
-allowed range.
+allowed range; what real exporters write beside the specification (a title line before the first
+``newmtl``, a material defined twice, ``illum 2.0``, ``Ni -1``, ``map_Bump``, the PBR extension's
+``Pr``/``Pm``/...) is read with a note or a warning (:func:`read_mtl`).
 """
 
 from __future__ import annotations
@@ -136,7 +138,20 @@ class MtlMaterial:
 #: The options of a texture statement (``map_Kd -s 1 1 1 wood.png``) and how many words each takes
 #: (``-o``, ``-s``, ``-t``: one to three numbers), from the specification.
 TEXTURE_OPTIONS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1, "-imfchan": 1,
-                   "-mm": 2, "-o": 3, "-s": 3, "-t": 3, "-texres": 1, "-type": 1}
+                   "-mm": 2, "-o": 3, "-s": 3, "-t": 3, "-texres": 1, "-type": 1,
+                   "-colorspace": 1}      # tinyobjloader's (map_Kd -colorspace sRGB wood.png)
+
+#: The statements read, by their lower-case spelling: exporters vary the case (Blender writes
+#: ``map_Bump``, some write ``map_kd``), and the reading keys on the specification's spelling.
+CANONICAL = {k.lower(): k for k in (
+    "newmtl", "Kd", "Ks", "Ka", "Ke", "Ns", "Ni", "Tf", "Tr", "d", "illum", "sharpness",
+    "map_Ka", "map_Kd", "map_Ks", "map_Ke", "map_Ns", "map_d", "map_bump", "bump", "norm", "map_norm",
+    "disp", "map_disp", "decal", "map_decal", "refl", "map_refl",
+    "Pr", "Pm", "Ps", "Pc", "Pcr", "aniso", "anisor", "map_Pr", "map_Pm", "map_Ps")}
+#: The physically based extension of MTL (Clara.io's, written by Blender and others): statement ->
+#: what it holds; none is read by the reflection reading, so each is a warning.
+PBR = {"Pr": "roughness", "Pm": "metallic", "Ps": "sheen", "Pc": "clearcoat thickness",
+       "Pcr": "clearcoat roughness", "aniso": "anisotropy", "anisor": "anisotropy rotation"}
 
 
 def _is_number(w) -> bool:
@@ -147,20 +162,46 @@ def _is_number(w) -> bool:
     return True
 
 
+def _is_option(w) -> bool:
+    return len(w) > 1 and w[0] == "-" and w[1:].isalpha()
+
+
+def _skip_option(words, i) -> int:
+    """The index after the option ``words[i]`` and its arguments (:data:`TEXTURE_OPTIONS`)."""
+    n = TEXTURE_OPTIONS.get(words[i].lower())
+    i += 1
+    if n in (1, 2):
+        return i + n
+    k = 0          # -o/-s/-t: up to three numbers; an unknown option: the numbers after it
+    while i < len(words) and k < (n or len(words)) and _is_number(words[i]):
+        i, k = i + 1, k + 1
+    if n is None and k == 0 and i < len(words) - 1 and not _is_option(words[i]):
+        i += 1     # an unknown option with a word argument (Blender's "-imgchan b"), a name after it
+    return i
+
+
+def _options_only(words) -> bool:
+    """``words`` are known options and their arguments, nothing else."""
+    i = 0
+    while i < len(words):
+        if words[i].lower() not in TEXTURE_OPTIONS:
+            return False
+        i = _skip_option(words, i)
+    return i == len(words)
+
+
 def texture_file(words) -> str:
     """The file name of a texture statement's ``words``: what follows its options
     (:data:`TEXTURE_OPTIONS`), spaces kept (``map_Kd -s 1 1 1 my wood.png`` -> ``my wood.png``);
-    ``""`` where nothing follows.  An option not in the table is skipped with the numbers after it."""
+    ``""`` where nothing follows.  An option not in the table is skipped with the numbers after it (or,
+    with none, the one word after it where a name still follows); known options written after the
+    name (``bump.jpg -bm 1.5``) are not part of it."""
     i, words = 0, list(words)
-    while i < len(words) and len(words[i]) > 1 and words[i][0] == "-" and words[i][1:].isalpha():
-        n = TEXTURE_OPTIONS.get(words[i].lower())
-        i += 1
-        if n in (1, 2):
-            i += n
-        else:          # -o/-s/-t: up to three numbers; an unknown option: the numbers after it
-            k = 0
-            while i < len(words) and k < (n or len(words)) and _is_number(words[i]):
-                i, k = i + 1, k + 1
+    while i < len(words) and _is_option(words[i]):
+        i = _skip_option(words, i)
+    for j in range(i + 1, len(words)):
+        if words[j].lower() in TEXTURE_OPTIONS and _options_only(words[j:]):
+            return " ".join(words[i:j])
     return " ".join(words[i:])
 
 
@@ -175,6 +216,15 @@ def _numbers(where, key, words, lo, hi):
     return np.array(vals * 3 if len(vals) == 1 else vals, float)
 
 
+def _float(words):
+    """The one finite number of ``words``, else None."""
+    try:
+        v = float(words[0]) if len(words) == 1 else math.nan
+    except ValueError:
+        return None
+    return v if math.isfinite(v) else None
+
+
 def _number(where, key, words, lo, hi) -> float:
     try:
         v = float(words[0]) if len(words) == 1 else math.nan
@@ -187,9 +237,10 @@ def _number(where, key, words, lo, hi) -> float:
 
 def _illum(where, words):
     try:
-        n = int(words[0]) if len(words) == 1 else None
+        x = float(words[0]) if len(words) == 1 else math.nan
     except ValueError:
-        n = None
+        x = math.nan
+    n = int(x) if math.isfinite(x) and x == int(x) else None      # "2" and "2.0" (Tinkercad writes 0.0)
     if n is None:
         raise ValueError(f"{where}: illum must be one integer (0-10), got {' '.join(words)!r}")
     if n not in ILLUM:
@@ -201,31 +252,38 @@ def read_mtl(path) -> list[MtlMaterial]:
     """Every ``newmtl`` of the ``.mtl`` file ``path``, in file order.
 
     The text: UTF-8, UTF-16 with its byte-order mark, else Windows-1252 or Latin-1 (noted; :func:`_text`).
-    ValueError for a missing or unreadable file, a statement before the first
-    ``newmtl``, a value out of its range (``Kd``, ``Ks`` in [0, 1]; ``Ns`` in
-    [0, 1e6]; ``illum`` one of 0-3), two materials of one name, or a file with
-    no material.
+    ValueError for a missing or unreadable file, a value out of its range (``Kd``, ``Ks`` in
+    [0, 1]; ``Ns`` in [0, 1e6]; ``illum`` one of 0-10), or a file with no material.  What
+    exporters write that the specification does not have is read with a note or a warning, not
+    refused: statements before the first ``newmtl`` (a title line), a second material of one name
+    (the first kept), ``illum 2.0``, ``Ni -1``, statements in another case (``map_Bump``), the PBR
+    extension's statements (:data:`PBR`, warned: not read).
     """
     text, encoding = _text(path)
     out: list[MtlMaterial] = []
     cur = None
+    before, again = [], []      # statements before the first newmtl; materials defined again
     for ln, raw in enumerate(re.split(r"\r\n|\r|\n", text), 1):
         s = raw.split("#", 1)[0].strip()
         if not s:
             continue
         key, *words = s.split()
+        key = CANONICAL.get(key.lower(), key)
         where = f"{path}:{ln}" + (f" (material {cur.name!r})" if cur else "")
         if key == "newmtl":
             if not words:
                 raise ValueError(f"{where}: newmtl needs a name")
             name = " ".join(words)
-            if any(m.name == name for m in out):
-                raise ValueError(f"{where}: material {name!r} defined twice")
             cur = MtlMaterial(name, ln)
-            out.append(cur)
+            first = next((m for m in out if m.name == name), None)
+            if first is None:
+                out.append(cur)
+            else:           # read (its values checked) and set aside
+                again.append((first, cur))
             continue
-        if cur is None:
-            raise ValueError(f"{where}: {key!r} before the first newmtl")
+        if cur is None:     # a title line some exporters write (Mineways: "Wavefront OBJ material file")
+            before.append((ln, s, key in CANONICAL.values()))
+            continue
         if key in ("Kd", "Ks"):
             if words and words[0] in ("spectral", "xyz"):
                 raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b in [0, 1]")
@@ -242,7 +300,17 @@ def read_mtl(path) -> list[MtlMaterial]:
                 words = words[1:]
             cur.dissolve[key] = _number(where, key, words, 0.0, 1.0)
         elif key == "Ni":
-            cur.Ni = _number(where, key, words, 0.0, 10.0)
+            v = _float(words)
+            if v is None or v > 10.0:
+                raise ValueError(f"{where}: Ni must be one number in [0, 10] (the index of refraction; 0 or "
+                                 f"below, which exporters write for 'not set', is read as not given), "
+                                 f"got {' '.join(words)!r}")
+            cur.Ni = v      # only glass reads it (Reading.surface): below 1 it warns and reads 1.5
+            if v <= 0.0:
+                cur.notes.append(f"Ni {v:g} is outside the specification's range 0.001-10")
+        elif key in PBR:
+            cur.warnings.append(f"{key} {' '.join(words)} (MTL's physically based extension: {PBR[key]}) is not "
+                                f"read: the conversion reads Kd, Ks, Ns and illum")
         elif key in ("Ke", "Tf"):
             if words and words[0] in ("spectral", "xyz"):
                 raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b")
@@ -258,6 +326,12 @@ def read_mtl(path) -> list[MtlMaterial]:
         cur.given.add(key)
     if not out:
         raise ValueError(f"MTL file {str(path)!r} defines no material (no newmtl line)")
+    for ln, text_, known in before:
+        (out[0].warnings if known else out[0].notes).append(
+            f"line {ln}: {text_!r} before the first newmtl belongs to no material: not read")
+    for first, later in again:
+        first.warnings.append(f"material {first.name!r} is defined again at line {later.line}: that definition is "
+                              f"not read (the first is kept, as tinyobjloader does; some loaders keep the last)")
     if encoding != "utf-8":
         for m in out:
             m.notes.append(f"the file is not UTF-8: read as {encoding}")
@@ -324,9 +398,10 @@ def highlight_spec(Ks, Ns, fresnel: str = "none") -> str:
     return f"cook-torrance:distribution=blinn:m={m!r}:rs={_spec_colour(Ks)}:fresnel={fresnel}:geometry=vgroove"
 
 
-#: Texture statements a conversion drops and warns about (what a user sees changes: the relief, the
-#: cut-outs, the decals); the others it drops are noted.
-WARNED_TEXTURES = ("bump", "map_bump", "norm", "map_norm", "disp", "map_disp", "decal", "map_d")
+#: Texture statements a conversion drops with a note only (the ambient colour is not a property of a
+#: reflector); every other texture it drops is a warning (what a user sees changes: the relief, the
+#: cut-outs, the decals, the emission, the roughness).
+NOTED_TEXTURES = ("map_Ka",)
 
 
 @dataclass
@@ -350,10 +425,12 @@ def _surface(m: MtlMaterial, notes: list, warnings: list) -> dict:
     out = {}
     if m.illum in GLASS:
         out["glass"] = GLASS[m.illum]
-        ior = m.Ni if m.Ni is not None and m.Ni >= 1.0 else None
+        ior = m.Ni if m.Ni is not None and m.Ni > 1.0 else None
         if ior is None:
-            warnings.append(f"illum {m.illum} (glass): Ni {'not given' if m.Ni is None else f'{m.Ni:g} (below 1)'}: "
-                            f"the index of glass, {GLASS_IOR:g}, read")
+            said = ("not given" if m.Ni is None else f"{m.Ni:g} (below 1)" if m.Ni < 1.0 else
+                    "1 (the index of air: a glass that neither reflects nor refracts, invisible; exporters write it "
+                    "for 'not set')")
+            warnings.append(f"illum {m.illum} (glass): Ni {said}: the index of glass, {GLASS_IOR:g}, read")
         out["ior"] = ior or GLASS_IOR
         out["transmittance"] = [float(x) for x in (m.Tf if m.Tf is not None else np.ones(3))]
         notes.append(f"illum {m.illum} ({ILLUM[m.illum]}): glass, a smooth {out['glass']} of index {out['ior']:g} "
