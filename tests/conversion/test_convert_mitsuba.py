@@ -528,3 +528,40 @@ def test_the_probes_kept_for_the_cached_bases_are_bounded():
     finally:
         CM._PROBES.clear()
         CM._PROBES.update(saved)
+
+
+def _colours(d):
+    """Every RGB value of a Mitsuba dict (nested), as arrays."""
+    if isinstance(d, dict):
+        if d.get("type") == "rgb":
+            return [np.asarray(d["value"], float)]
+        return [c for v in d.values() for c in _colours(v)]
+    return []
+
+
+@pytest.mark.parametrize("mtl, to", [
+    ("Ns 92.156863\nKd 0.64 0.64 0.64\nKs 0.25 0.25 0.25\nillum 2", "mitsuba"),     # three.js's WaltHead
+    ("Ns 10\nKd 0 0 0\nKs 0.35 0.35 0.35\nillum 2", "mitsuba"),                       # a 3ds Max export
+    ("Ns 92.156863\nKd 0.64 0.64 0.64\nKs 0.25 0.25 0.25\nillum 2", "mitsuba:roughplastic"),
+])
+def test_a_grey_source_converts_to_a_grey_material(tmp_path, mtl, to):
+    # symmetry: a source alike in every channel has no colour to give its conversion (the per-channel
+    # polish against the luminance of the highlight gave WaltHead a diffuse (0.97, 0.92, 0.97) and a
+    # lobe (0.71, 0.84, 0.71), a green highlight, FLIP 0.090; now grey, FLIP 0.064)
+    (tmp_path / "grey.mtl").write_text(f"newmtl grey\n{mtl}\n")
+    (c,) = convert(str(tmp_path / "grey.mtl"), to=to).items
+    colours = _colours(c.result)
+    assert colours and all(np.ptp(v) <= 1e-12 * max(np.max(v), 1e-300) for v in colours), colours
+
+
+def test_the_grey_test_of_the_polish_fails_for_a_tinted_source_or_start():
+    from plausible.conversion.mitsuba import _grey
+    F, Alb = np.ones((3, 10)), np.ones((3, 4))
+    g, A, x = np.full((10, 3), 0.5), np.full((4, 3), 0.3), np.full((2, 3), 0.2)
+    assert _grey(F, Alb, x, g, A, None)
+    g2 = g.copy()
+    g2[3, 1] *= 1.001
+    x2 = x.copy()
+    x2[0, 2] = 0.3
+    assert not _grey(F, Alb, x, g2, A, None) and not _grey(F, Alb, x2, g, A, None)
+    assert not _grey(np.ones((3, 10, 3)), Alb, x, g, A, None)        # a tinted family's bases per channel

@@ -42,7 +42,8 @@ NumPy.  The steps (:func:`fit_family`):
    difference Jacobian on the colours' residuals at each point's best colours
    (:class:`AxesObjective`: a variable projection), the best point by the true figure kept.
 4. **Polish** the colours of each channel on the true metric (L-BFGS-B on the
-   smooth bound at beta = 20, 200, 2000, then Nelder-Mead), kept if better.
+   smooth bound at beta = 20, 200, 2000, then Nelder-Mead), kept if better; a grey
+   source's once, one colour for every channel (:func:`_polish`).
 5. **Measure** the result as loaded from its dict: every metric through Mitsuba
    again, and the albedo at 0, 45 and 75 degrees by Mitsuba's own sampler
    (:func:`sampler_albedo`).
@@ -557,13 +558,15 @@ class Highlight:
         self.w = np.asarray(LUMINANCE_WEIGHTS, float)
 
     def channel(self, x, c):
-        return Highlight(self.images, self.peaks, x, c)
+        """The highlight of channel ``c``'s colours, the others held at ``x``; ``c = None``: of one colour
+        given to every channel (a grey source's polish, :func:`_polish`)."""
+        return Highlight(self.images, self.peaks, x, slice(None) if c is None else c)
 
     def ratios(self, x):
         x = np.asarray(x, float)
         if self.c is not None:
             full = self.x.copy()
-            full[:, self.c] = x.reshape(-1)
+            full[:, self.c] = x.reshape(-1) if isinstance(self.c, (int, np.integer)) else x.reshape(-1, 1)
             x = full
         from ..mitsuba.looks import PEAK_FLOOR, _window_max
 
@@ -703,17 +706,32 @@ class ColourObjective:
 
 def _polish(F, Alb, x, g, A, eps, metric, rows=None, hard=False, hl=None):
     """Step 4 on each channel by the fitter's optimiser (:class:`ColourObjective`); the
-    better of ``x`` and the polished point per channel."""
+    better of ``x`` and the polished point per channel.  A grey source (:func:`_grey`) is
+    polished once, one colour for every channel: the highlight's penalty reads the luminance,
+    in which the channels weigh differently, so polishing them one by one tinted a grey
+    material (three.js's WaltHead, Kd 0.64 and Ks 0.25, came out with a green highlight)."""
     from ..fitting.fit import optimise
 
     x = x.copy()
-    for c in range(x.shape[1]):
+    grey = _grey(F, Alb, x, g, A, hl)
+    for c in ([0] if grey else range(x.shape[1])):
         obj = ColourObjective(_ch(F, c), _ch(Alb, c), g[:, c:c + 1], A[:, c:c + 1], eps, metric, rows, hard,
-                              None if hl is None else hl.channel(x, c))
+                              None if hl is None else hl.channel(x, None if grey else c))
         obj(x[:, c])                             # the start is a candidate: never worse than it
         optimise(obj, [x[:, c].copy()], lambda: None)
-        x[:, c] = obj.best_x
+        x[:, slice(None) if grey else c] = obj.best_x[:, None] if grey else obj.best_x
     return x
+
+
+def _grey(F, Alb, x, g, A, hl) -> bool:
+    """The channels are alike: the source's values ``g`` and albedos ``A`` the same in every channel
+    (to 1e-12 relative), the bases shared (an untinted family) and the start ``x`` grey."""
+    def same(v):
+        v = np.asarray(v, float)
+        return bool(np.all(np.abs(v - v[..., :1]) <= 1e-12 * np.maximum(np.abs(v[..., :1]), 1e-300)))
+
+    return (F.ndim == 2 and Alb.ndim == 2 and (hl is None or hl.images.ndim != 5)
+            and same(g) and same(A) and same(x))
 
 
 #: The axes' search (:class:`AxesObjective`): the difference step of the Jacobian in the axes' own units
