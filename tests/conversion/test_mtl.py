@@ -196,11 +196,27 @@ def test_statements_in_another_case_are_read_as_the_specification_spells_them(tm
     assert m.textures == {"map_Kd": "wood.png", "map_bump": "-bm 0.5 n.png"}
 
 
-def test_the_pbr_extension_statements_are_warned_as_not_read(tmp_path):
-    (m,) = read_mtl(write(tmp_path, "newmtl m\nKd 0.8 0.8 0.8\nPr 0.4\nPm 0.9\naniso 0.2\n"))
-    got = " ".join(m.warnings)
-    for words in ("Pr 0.4 (MTL's physically based extension: roughness) is not read", "Pm 0.9", "aniso 0.2"):
-        assert words in got
+def test_the_pbr_extension_is_read_as_gltfs_metallic_roughness_brdf(tmp_path):
+    # Blender 3.6's export (its io_tests' materials_pbr.mtl): before, Pr and Pm were noted only and
+    # the material read from Kd, Ks 0.25 and no Ns: a Lambertian under a broad lobe, metallic 0
+    from plausible.conversion.mtl import reading
+    text = ("newmtl Mat1\nKd 0.8 0.276449 0.101911\nKs 0.25 0.25 0.25\nillum 3\nPr 0.4\nPm 0.9\nPs 0.06\n"
+            "Pc 0\naniso 0.2\nanisor 0\n"
+            "newmtl ns\nKd 0.5 0.5 0.5\nNs 98\nPm 0\nnewmtl none\nKd 0.5 0.5 0.5\nPm 1\n"
+            "newmtl smooth\nKd 0.5 0.5 0.5\nPr 0\n")
+    mat1, ns, none, smooth = (reading(m) for m in read_mtl(write(tmp_path, text)))
+    assert mat1.spec == "gltf-pbr:base_color=0.8,0.276449,0.101911:metallic=0.9:roughness=0.4"
+    wi, wo = plausible.direction(0.3, 0.0), plausible.direction(0.5, 2.5)
+    direct = plausible.make("gltf-pbr", base_color=[0.8, 0.276449, 0.101911], metallic=0.9, roughness=0.4)
+    assert np.allclose(mat1.model.eval(wi, wo), direct.eval(wi, wo), rtol=1e-14)
+    got = " ".join(mat1.warnings)
+    assert "Ps 0.06 (MTL's physically based extension: sheen) is not read" in got and "aniso 0.2" in got
+    assert "Pc 0" not in got and "anisor 0" not in got          # zero: no coat, no rotation (noted)
+    assert not any(w.startswith(("Pr", "Pm")) for w in mat1.warnings)
+    # Pr missing: from Ns (alpha = sqrt(2 / (Ns + 2)) = 0.1414, roughness its root), else Blender's 0.5
+    assert ":metallic=0.0:" in ns.spec and float(ns.spec.rsplit("=", 1)[1]) == pytest.approx(0.02 ** 0.25, rel=1e-14)
+    assert none.spec.endswith("metallic=1.0:roughness=0.5")
+    assert smooth.spec.endswith("roughness=0.01") and any("raised to the model's smallest" in n for n in smooth.notes)
 
 
 @pytest.mark.parametrize("words, name", [

@@ -372,3 +372,16 @@ def test_the_textures_of_glass_are_warned_where_they_are_dropped(tmp_path):
     (g,) = convert(str(p), to="gltf").items
     assert [w.split(":")[0] for w in g.warnings] == ["map_bump glass_n.png"]
     assert any(n.startswith("map_Kd glass.png: the glass's baseColorTexture") for n in g.notes)
+
+
+def test_a_blender_pbr_material_converts_to_gltf_with_its_own_metallic_and_roughness(tmp_path):
+    # the independent truth: the statements themselves (Blender writes its Principled BSDF's base colour,
+    # metallic and roughness, which are glTF's); before, Pr and Pm were ignored and the glTF came out a
+    # dielectric fitted to Kd and Ks
+    p = write(tmp_path, "newmtl Mat1\nKd 0.8 0.276449 0.101911\nKs 0.25 0.25 0.25\nNi 1.45\nd 1\nillum 3\n"
+                        "Pr 0.4\nPm 0.9\n", "pbr.mtl")
+    (g,) = convert(str(p), to="gltf").items
+    assert g.params["metallic"] == pytest.approx(0.9, abs=2e-3)
+    assert g.params["roughness"] == pytest.approx(0.4, abs=2e-3)
+    assert np.allclose(g.params["base_color"], [0.8, 0.276449, 0.101911], atol=2e-3)
+    assert g.looks.flip < 0.01 and not g.warnings

@@ -54,6 +54,8 @@ gives the reasons):
   exporters write for *opaque* (``Tr`` taken for ``d``): read as opaque, with a warning.  ``map_d``:
   ``surface["opacity_map"]``.  ``Ke`` (emission, not 0): ``surface["emission"]`` (glTF's
   ``emissiveFactor``; Mitsuba has no emitter in a BSDF: a warning).
+* **The PBR extension** (``Pr``, ``Pm``; Blender's export): glTF's metallic-roughness BRDF of base
+  colour ``Kd`` (:func:`_pbr_spec`); ``Ks``, ``Ns`` and ``illum`` are then not read.
 * ``Ka`` (ambient) is not a property of a reflector: ignored with a note.  Every ``map_*`` (and
   ``bump``, ``norm``, ``disp``, ``decal``, ``refl``) is carried by reference: its file name (and
   options) in :attr:`MtlMaterial.textures`, the file name alone (what follows the options, spaces
@@ -128,6 +130,8 @@ class MtlMaterial:
     warnings: list = field(default_factory=list)
     #: The dissolve statements as given (``d``, ``Tr``: statement -> value).
     dissolve: dict = field(default_factory=dict)
+    #: The PBR extension's statements read (:data:`PBR_READ`: statement -> value).
+    pbr: dict = field(default_factory=dict)
 
     @property
     def texture_files(self) -> dict:
@@ -149,9 +153,13 @@ CANONICAL = {k.lower(): k for k in (
     "disp", "map_disp", "decal", "map_decal", "refl", "map_refl",
     "Pr", "Pm", "Ps", "Pc", "Pcr", "aniso", "anisor", "map_Pr", "map_Pm", "map_Ps")}
 #: The physically based extension of MTL (Clara.io's, written by Blender and others): statement ->
-#: what it holds; none is read by the reflection reading, so each is a warning.
+#: what it holds.  ``Pr`` and ``Pm`` are read (:data:`PBR_READ`: the material is then glTF's
+#: metallic-roughness BRDF, :func:`reading`); the others are warned about, not read.
 PBR = {"Pr": "roughness", "Pm": "metallic", "Ps": "sheen", "Pc": "clearcoat thickness",
        "Pcr": "clearcoat roughness", "aniso": "anisotropy", "anisor": "anisotropy rotation"}
+PBR_READ = ("Pr", "Pm")
+#: The roughness of a PBR material without ``Pr`` or ``Ns`` (Blender's Principled BSDF default).
+PBR_ROUGHNESS = 0.5
 
 
 def _is_number(w) -> bool:
@@ -257,7 +265,8 @@ def read_mtl(path) -> list[MtlMaterial]:
     exporters write that the specification does not have is read with a note or a warning, not
     refused: statements before the first ``newmtl`` (a title line), a second material of one name
     (the first kept), ``illum 2.0``, ``Ni -1``, statements in another case (``map_Bump``), the PBR
-    extension's statements (:data:`PBR`, warned: not read).
+    extension's statements (:data:`PBR`: ``Pr`` and ``Pm`` read, :func:`_pbr_spec`; the others warned
+    where not zero).
     """
     text, encoding = _text(path)
     out: list[MtlMaterial] = []
@@ -308,9 +317,12 @@ def read_mtl(path) -> list[MtlMaterial]:
             cur.Ni = v      # only glass reads it (Reading.surface): below 1 it warns and reads 1.5
             if v <= 0.0:
                 cur.notes.append(f"Ni {v:g} is outside the specification's range 0.001-10")
-        elif key in PBR:
-            cur.warnings.append(f"{key} {' '.join(words)} (MTL's physically based extension: {PBR[key]}) is not "
-                                f"read: the conversion reads Kd, Ks, Ns and illum")
+        elif key in PBR_READ:
+            cur.pbr[key] = _number(where, key, words, 0.0, 1.0)
+        elif key in PBR:    # a zero (no sheen, no coat, no anisotropy) is the BRDF read: a note
+            (cur.notes if _float(words) == 0.0 else cur.warnings).append(
+                f"{key} {' '.join(words)} (MTL's physically based extension: {PBR[key]}) is not read: a PBR "
+                f"material is read as glTF's metallic-roughness BRDF of Kd, Pm and Pr")
         elif key in ("Ke", "Tf"):
             if words and words[0] in ("spectral", "xyz"):
                 raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b")
@@ -455,7 +467,9 @@ def reading(m: MtlMaterial) -> Reading:
 
     notes, warnings = list(m.notes), list(m.warnings)
     parts = []
-    if m.illum in (0, 1):
+    if m.pbr and m.illum not in GLASS:
+        parts.append(_pbr_spec(m, notes))
+    elif m.illum in (0, 1):
         if np.any(m.Ks > 0):
             notes.append(f"illum {m.illum} has no highlight: Ks is unused")
         parts.append(f"lambertian:rd={_spec_colour(m.Kd)}")
@@ -471,7 +485,7 @@ def reading(m: MtlMaterial) -> Reading:
                          "twice); no Fresnel (MTL gives Fresnel to illum 5 and 7)")
         if m.illum == 5:
             notes.append("illum 5: the highlight with Schlick's Fresnel of R0 = Ks")
-    total = m.Kd + (m.Ks if m.illum >= 2 else 0.0)
+    total = m.Kd + (m.Ks if m.illum >= 2 and not m.pbr else 0.0)
     if np.any(total > 1.0 + 1e-12) and m.illum not in GLASS:
         notes.append(f"Kd + Ks = {_spec_colour(np.round(total, 4))} exceeds 1: energy conservation is not "
                      "guaranteed (it holds only where the highlight reflects less than Ks; the conversion "
@@ -483,6 +497,27 @@ def reading(m: MtlMaterial) -> Reading:
                    f"material {m.name!r} skipped")
     models = [registry.make_from_spec(s) for s in parts]
     return Reading(Sum(models, name=m.name), " + ".join(parts), notes, warnings, surface, refused)
+
+
+def _pbr_spec(m: MtlMaterial, notes: list) -> str:
+    """The spec of a material of MTL's PBR extension (``Pr``, ``Pm`` given): glTF's metallic-roughness
+    BRDF (``gltf-pbr``) of base colour ``Kd``, metallic ``Pm`` (0 where missing) and roughness ``Pr`` (where
+    missing: from ``Ns`` by the Blinn-Beckmann correspondence ``alpha = sqrt(2 / (Ns + 2))``, roughness
+    ``sqrt(alpha)``, else :data:`PBR_ROUGHNESS`), as Blender's exporter writes them from its Principled
+    BSDF (whose roughness is glTF's)."""
+    metallic = m.pbr.get("Pm", 0.0)
+    if "Pr" in m.pbr:
+        roughness, how = m.pbr["Pr"], "Pr"
+    elif "Ns" in m.given:
+        roughness, how = math.sqrt(math.sqrt(2.0 / (m.Ns + 2.0))), f"from Ns {m.Ns:g} (alpha = sqrt(2 / (Ns + 2)))"
+    else:
+        roughness, how = PBR_ROUGHNESS, f"{PBR_ROUGHNESS:g} (no Pr or Ns: Blender's default)"
+    if roughness < 0.01:
+        roughness, how = 0.01, how + "; raised to the model's smallest, 0.01"
+    notes.append(f"the PBR extension (Pr/Pm): glTF's metallic-roughness BRDF of base colour Kd, metallic "
+                 f"{metallic:g}{'' if 'Pm' in m.pbr else ' (Pm not given)'}, roughness {roughness:.6g} ({how}); "
+                 f"Ks, Ns and illum {m.illum} not read")
+    return f"gltf-pbr:base_color={_spec_colour(m.Kd)}:metallic={metallic!r}:roughness={roughness!r}"
 
 
 def as_model(m: MtlMaterial):
