@@ -225,3 +225,47 @@ def test_quick_chi2_cells_settle_far_below_the_count_noise():
         assert d.max() > 0     # the two computations differ: the quick one stopped earlier
         assert np.all(d <= 0.05 * np.sqrt(np.maximum(ef, 1.0)))
         assert np.sum(d ** 2 / np.maximum(ef, 1.0)) <= 0.01
+
+
+class Negative(ReciprocalPhong):
+    """Reciprocal Phong minus a constant: symmetric, albedo below 1, and negative on most pairs."""
+
+    def _f(self, ops, wi, wo, p):
+        return super()._f(ops, wi, wo, p) - 0.2
+
+
+class NotFinite(ReciprocalPhong):
+    """NaN (or inf) where wi.x > 0.5; the rest reciprocal Phong."""
+
+    value = math.nan
+
+    def _f(self, ops, wi, wo, p):
+        return ops.where(wi[0] > 0.5, self.value, super()._f(ops, wi, wo, p))
+
+
+class Infinite(NotFinite):
+    value = math.inf
+
+
+class NanPdf(ReciprocalPhong):
+    def _pdf(self, ops, wi, wo, q):
+        return lobe_pdf(ops, wi, wo, q.n) * math.nan
+
+
+@pytest.mark.parametrize("cls, words", [(Negative, "f is negative (-0.2"), (NotFinite, "f is not finite (nan)"),
+                                        (Infinite, "f is not finite (inf)")])
+def test_energy_fails_a_function_that_is_no_brdf_by_name(cls, words):
+    # before: f - 0.2 passed energy (its albedo is below 1), NaN raised a TypeError deep inside energy, and an
+    # infinite f passed with albedo inf after minutes of refinement (an outside audit of bad input)
+    m = make(cls, n=20)
+    e = energy(m, thetas_deg=(0, 60, 89))
+    assert not e.passed and not e.unresolved and words in e.worst["problems"][0], e.worst
+    rep = plausible.check(m, quick=True)
+    verdict = {r.name: r.passed for r in rep.results}
+    assert not verdict["energy"] and not verdict["sampling"] and not rep.passed
+    assert energy(make(ReciprocalPhong, n=20), thetas_deg=(0, 60, 89)).passed       # the same model, a BRDF
+
+
+def test_chi2_fails_a_pdf_that_is_not_finite():
+    r = chi2(make(NanPdf, n=30), direction(math.radians(30)), n_samples=20_000)
+    assert not r.passed and "not finite" in r.message, r.message     # before: passed, p-value 1

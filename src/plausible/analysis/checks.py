@@ -125,6 +125,32 @@ def guard_albedos(model, wis, n: int = GUARD_SAMPLES, seed: int = 11):
     return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)
 
 
+def value_problem(model, wis, seed: int = 5):
+    """What makes ``f`` no BRDF, seen at the incidences ``wis`` on stratified outgoing directions
+    (:func:`stratified_directions`, 8 x 16 and a grazing ring): a value that is not finite or one below
+    zero, as one sentence naming the worst pair; None where every value is finite and non-negative.
+    An albedo cannot show either (a negative ``f`` has an albedo below 1; an infinite or NaN one an
+    albedo no comparison rejects), so :func:`energy` fails on it first."""
+    wis = np.asarray(wis, dtype=np.float64).reshape(-1, 3)
+    if not len(wis):
+        return None
+    wo = stratified_directions(8, 16, np.random.default_rng(seed))
+    a, b = np.repeat(wis, len(wo), axis=0), np.tile(wo, (len(wis), 1))
+    with np.errstate(all="ignore"):
+        f = np.asarray(model.eval(a, b), dtype=np.float64).reshape(len(a), -1)
+    finite = np.isfinite(f).all(axis=1)
+    if not finite.all():
+        k = int(np.argmin(finite))
+        return (f"f is not finite ({', '.join(f'{x:g}' for x in f[k])}) at wi = {np.round(a[k], 4).tolist()}, "
+                f"wo = {np.round(b[k], 4).tolist()} ({int((~finite).sum())} of {len(a)} pairs): no BRDF")
+    low = f.min(axis=1)
+    if low.min() < 0.0:
+        k = int(np.argmin(low))
+        return (f"f is negative ({low[k]:.6g}) at wi = {np.round(a[k], 4).tolist()}, wo = "
+                f"{np.round(b[k], 4).tolist()} ({int((low < 0).sum())} of {len(a)} pairs): no BRDF (a BRDF is >= 0)")
+    return None
+
+
 def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
            guard: bool | None = None, progress=None, results=None) -> PropertyResult:
     """Max directional albedo over a grid of incidence directions (azimuths too
@@ -149,6 +175,11 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     dirs = energy_directions(model, thetas_deg, phis_deg)
     tick = start(progress, len(dirs), f"energy {model.name}")
     wis = [direction(math.radians(t), math.radians(p)) for t, p in dirs]
+    problem = value_problem(model, wis)
+    if problem is not None:
+        tick(len(dirs))
+        return PropertyResult("energy", False, math.nan, f"<= 1 + {tol:g} (max directional albedo)",
+                              dict(problems=[problem]), dict(grid=[], guard=False, unresolved=0, onset_deg=None))
     res = albedos(model, wis) if results is None else list(results)
     if guard is None:
         guard = callable(getattr(model, "sample", None)) and "sampling" not in getattr(model, "not_applicable", {})
@@ -158,6 +189,8 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     for (t, p), r, mc, se in zip(dirs, res, *mcs):
         v = float(np.max(r.value))
         e = float(np.max(r.error))
+        if not (math.isfinite(v) and math.isfinite(e)):      # f finite on the probes, its integral not
+            v, e = math.inf, math.inf
         agree = not guard or abs(float(np.mean(r.value)) - mc) <= GUARD_SIGMAS * se + e + 1e-9
         resolved = agree and e <= tol
         curve.append(dict(theta_deg=t, phi_deg=p, albedo=v, error=e, resolved=resolved,

@@ -321,7 +321,12 @@ def chi2_many(model, wis, *, seeds=None, n_samples: int = 200_000, n_theta: int 
 
 def _test(cells, s, n_samples, a1, min_expected, wi) -> Chi2Result:
     """Stages 3-4 of one incidence from its cells and samples."""
+    bad = int(np.sum(~np.isfinite(s.pdf)))
     obs, exp, desc = _histogram(cells, s, n_samples)
+    if bad or not np.all(np.isfinite(exp)):     # a NaN in every comparison reads as a pass: fail it by name
+        msg = (f"{bad} of {len(s.pdf)} sampled pdfs are not finite" if bad else
+               f"the pdf integrates to a value that is not finite in {int(np.sum(~np.isfinite(exp)))} cell(s)")
+        return Chi2Result(False, 0.0, math.inf, 0, a1, n_samples, len(obs), wi.tolist(), msg, [])
     zero = (exp <= 0) & (obs > 0)
     if np.any(zero):      # samples where the pdf integrates to zero: no statistic needed
         k = int(np.argmax(np.where(zero, obs, -1)))

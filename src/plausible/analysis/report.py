@@ -15,7 +15,7 @@ from ..integrals.albedo import (TOL as ALBEDO_TOL, albedos, direction, is_isotro
 from ..progress import start, within
 from ..text import jsonable
 from .checks import (ENERGY_THETAS, GUARD_SAMPLES, QUICK_ALBEDO_TOL, PropertyResult, energy, energy_directions,
-                     grazing_thetas, reciprocity, sampling_consistency)
+                     grazing_thetas, reciprocity, sampling_consistency, value_problem)
 from .chi2 import AdaptiveBinning, chi2_many
 
 #: The chi-square cells of ``check(quick=True)`` have settled when a refinement changes
@@ -264,15 +264,21 @@ def _check_one(model, *, alpha, n_samples, quick, progress) -> CheckReport:
     s_wis = ([direction(math.radians(t), math.radians(p))
               for p in ((0,) if is_isotropic(model) else s_phis) for t in s_thetas]
              if "sampling" not in skip else [])
-    shared = _albedos_of(model, e_wis + s_wis, QUICK_ALBEDO_TOL if quick else ALBEDO_TOL)
+    # a value that is no BRDF's (negative, infinite, NaN) fails energy and sampling by name: its albedos
+    # would pass a comparison (NaN), take minutes to refine (infinite) or look conserving (negative)
+    problem = value_problem(model, e_wis + s_wis)
+    shared = _albedos_of(model, e_wis + s_wis, QUICK_ALBEDO_TOL if quick else ALBEDO_TOL) if problem is None else None
     if "energy" in skip:
         rep.results.append(not_applicable("energy", skip["energy"]))
         tick(len(e_dirs))
     else:
         rep.results.append(energy(model, thetas_deg=thetas, phis_deg=(0.0,) if iso else None,
-                                  progress=within(tick), results=shared[:len(e_wis)]))
+                                  progress=within(tick), results=None if shared is None else shared[:len(e_wis)]))
     if "sampling" in skip:
         rep.results.append(not_applicable("sampling", skip["sampling"]))
+        tick(len(s_thetas) * len(s_phis))
+    elif problem is not None:
+        rep.results.append(PropertyResult("sampling", False, math.nan, "weight = f cos / pdf", dict(problems=[problem])))
         tick(len(s_thetas) * len(s_phis))
     else:
         rep.results.append(sampling_consistency(
