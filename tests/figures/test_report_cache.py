@@ -54,6 +54,36 @@ def test_an_interrupted_remake_leaves_the_previous_figure_whole(tmp_path, fake):
     assert again[fake]["cached"] is True
 
 
+def _wrapped_interrupt(ctx, interrupt_at=None):
+    """As :func:`_stamp`, but the Ctrl-C arrives as Mitsuba's render op re-raises it: a RuntimeError from it."""
+    if ctx.base_spp == interrupt_at:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as e:
+            raise RuntimeError("drjit.custom(<mitsuba.python.util._RenderOp>): error while performing a custom "
+                               "differentiable operation. (see above).") from e
+    _stamp(ctx)
+
+
+def test_an_interrupt_a_renderer_wraps_stops_the_run_and_keeps_the_previous_figure(tmp_path, monkeypatch, fake):
+    # before: recorded as a failed figure, which replaced the previous one, and the run went on
+    monkeypatch.setitem(F.FIGURES, fake, F.Figure(fake, "Fake", "test", "caption", _wrapped_interrupt,
+                                                  dict(interrupt_at=4096)))
+    run(tmp_path, only=[fake], spp=16)
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path, only=[fake], spp=4096)
+    m = json.loads((tmp_path / fake / "figure.json").read_text())
+    assert m["status"] == "ok" and m["spp"] == 16
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_a_runtime_error_without_an_interrupt_is_still_a_failed_figure(tmp_path, monkeypatch, fake):
+    def broken(ctx):
+        raise RuntimeError("a renderer's own error")
+    monkeypatch.setitem(F.FIGURES, fake, F.Figure(fake, "Fake", "test", "caption", broken, {}))
+    assert run(tmp_path, only=[fake], spp=16)[fake]["status"] == "failed"
+
+
 def test_an_interrupted_run_in_a_fresh_folder_writes_the_index_and_claims_nothing(tmp_path, fake):
     with pytest.raises(KeyboardInterrupt):
         run(tmp_path, only=[fake], spp=4096)

@@ -188,7 +188,9 @@ def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict
         try:
             fig.fn(ctx, **fig.params)
             m["status"] = "ok"
-        except Exception:   # a failing figure is reported, the others still run
+        except Exception as e:   # a failing figure is reported, the others still run
+            if _interrupted(e):     # Ctrl-C inside a render: Mitsuba's render op re-raises it as a RuntimeError
+                raise KeyboardInterrupt from e
             m["status"] = "failed"
             m["error"] = traceback.format_exc()
         ctx.finish()
@@ -201,6 +203,19 @@ def _make(fig, key: str, out: Path, *, resolution, spp, quick, progress) -> dict
     finally:    # interrupted (Ctrl-C): drop the unfinished figure
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _interrupted(e) -> bool:
+    """``e`` is an interrupt a library turned into another exception: a ``KeyboardInterrupt`` in its chain
+    of causes (``drjit.custom``, around every ``mitsuba.render``, raises a RuntimeError from it; recorded as
+    a failed figure, it replaced the previous one and the run went on to the next)."""
+    seen = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
 
 
 def _report(console, name, m):
