@@ -172,3 +172,31 @@ def test_models_keeps_bracketed_text(monkeypatch):
     assert r.exit_code == 0
     for text in ("[not reciprocal; not energy conserving]", "[max]", "[controlled]"):
         assert text in r.output, text
+
+
+# -- the environment and Mitsuba's parser (an outside audit of bad input: both were tracebacks) ------
+
+@pytest.mark.parametrize("var, value, words", [
+    ("PLAUSIBLE_BACKEND", "bogus", "environment variable PLAUSIBLE_BACKEND must be one of auto, numpy"),
+    ("PLAUSIBLE_VARIANT", "bogus", "environment variable PLAUSIBLE_VARIANT must be auto, cuda, llvm, scalar")])
+def test_a_bad_environment_variable_is_a_usage_error_naming_it(monkeypatch, var, value, words):
+    monkeypatch.setenv(var, value)
+    r = run("eval", "ward", "--wi", "0,0", "--wo", "0,0")
+    assert r.exit_code == 2 and words in r.output and "Traceback" not in r.output, r.output
+
+
+def test_a_variant_that_is_a_name_does_not_stop_a_command_that_does_not_render(monkeypatch):
+    monkeypatch.setenv("PLAUSIBLE_VARIANT", "cuda")      # no GPU needed to evaluate a BRDF
+    r = run("eval", "ward", "--wi", "0,0", "--wo", "0,0")
+    assert r.exit_code == 0 and float(r.output.split()[-1]) == pytest.approx(7.957747155), r.output
+
+
+@pytest.mark.parametrize("xml, words", [
+    ('<bsdf type="diffuse">\n  <rgb name="reflectance" value="0.5"/>\n</bsdf>\n', "missing version attribute"),
+    ('<bsdf type="nosuchplugin" version="3.0.0">\n</bsdf>\n', 'Plugin "nosuchplugin" not found')])
+def test_a_bsdf_file_mitsuba_cannot_load_is_refused_naming_the_file(tmp_path, xml, words):
+    pytest.importorskip("mitsuba")
+    (tmp_path / "b.xml").write_text(xml)
+    r = run("convert", tmp_path / "b.xml", "--to", "mitsuba", "--out", tmp_path / "x.json")
+    assert r.exit_code == 2 and "Mitsuba cannot load it" in r.output and words in r.output, r.output
+    assert not (tmp_path / "x.json").exists()

@@ -162,6 +162,7 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         try:
+            _check_environment()
             return super().invoke(ctx)
         except KeyboardInterrupt:
             click.echo("interrupted", err=True)
@@ -170,6 +171,26 @@ class _Group(click.Group):
             if e.errno == errno.EPIPE:
                 raise
             raise _SystemRefused(_os_error_text(e)) from None
+
+
+def _check_environment():
+    """``$PLAUSIBLE_BACKEND`` and ``$PLAUSIBLE_VARIANT``, checked before any command runs: a value that
+    names nothing is a usage error naming the variable and its choices (status 2), not a traceback where a
+    command first reads it nor a value a command ignores.  (A variant that is a name but does not render
+    on this machine is refused where a command renders, as ``--variant``.)"""
+    import os
+
+    from .arrays import backend
+    from .mitsuba.variant import ENV, is_name
+
+    try:
+        backend.requested()
+    except ValueError as e:
+        _fail(str(e))
+    v = os.environ.get(ENV, "")
+    if v.strip() and not is_name(v):
+        _fail(f"environment variable {ENV} must be auto, cuda, llvm, scalar or a Mitsuba variant name "
+              f"(llvm_ad_rgb, cuda_ad_rgb, ...); got {v!r}")
 
 
 def _version(ctx, param, value):
@@ -873,7 +894,7 @@ def convert_cmd(source, to, out, metric, nodes, as_json):
         _fail(f"--nodes chooses the node tree of --to blender; --to {to} writes no node tree: leave --nodes out")
     try:
         if out != "-":
-            check_output(out, to)          # a bad --out is refused before minutes of fitting
+            check_output(out, to, source)  # a bad --out is refused before minutes of fitting
         res = convert(source, to=to, metric=metric)
         if out == "-" and res.items:       # the file's text alone on stdout: .gltf for glTF, else .json
             click.echo(res.text(GLTF_SHAPED.get(res.to, ".json"), Path.cwd()), nl=False)

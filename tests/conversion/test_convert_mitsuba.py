@@ -565,3 +565,19 @@ def test_the_grey_test_of_the_polish_fails_for_a_tinted_source_or_start():
     x2[0, 2] = 0.3
     assert not _grey(F, Alb, x, g2, A, None) and not _grey(F, Alb, x2, g, A, None)
     assert not _grey(np.ones((3, 10, 3)), Alb, x, g, A, None)        # a tinted family's bases per channel
+
+
+def test_the_command_refuses_to_write_over_its_own_source(tmp_path):
+    # an outside audit: `convert scene.xml --to mitsuba --out scene.xml` rewrote a hand-written scene
+    from click.testing import CliRunner
+
+    from plausible.cli import main
+
+    scene = tmp_path / "scene.xml"
+    text = ('<scene version="3.0.0">\n  <!-- hand written -->\n  <bsdf type="diffuse" id="paint">\n'
+            '    <rgb name="reflectance" value="0.2, 0.5, 0.7"/>\n  </bsdf>\n</scene>\n')
+    scene.write_text(text)
+    for out in (str(scene), str(tmp_path / "." / "scene.xml")):
+        r = CliRunner().invoke(main, ["convert", str(scene), "--to", "mitsuba:diffuse", "--out", out])
+        assert r.exit_code == 2 and "is the source being converted" in r.output, r.output
+    assert scene.read_text() == text

@@ -107,7 +107,10 @@ def load_bsdf_xml(path: str, id: str | None = None):
         raise ValueError(f"{path}: {e}") from None
     ids = [el.get("id") for el in root.iter("bsdf") if el.get("id")]
     if root.tag == "bsdf" and (id is None or root.get("id") == id):
-        return mi.load_file(path)
+        try:
+            return mi.load_file(path)
+        except Exception as e:      # Mitsuba's parser: a missing version attribute, an unknown plugin, ...
+            raise ValueError(f"{path}: Mitsuba cannot load it: {str(e).strip().splitlines()[-1]}") from None
     if id is None:
         raise ValueError(f"{path}: the root is not a <bsdf> and no id was given; BSDF ids in the file: "
                          f"{', '.join(ids) or 'none'}")

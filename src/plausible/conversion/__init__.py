@@ -247,11 +247,16 @@ GLTF_SHAPED = {"gltf": ".gltf", "materialx": ".mtlx", "usd": ".usda"}
 _DCC_SUFFIXES = " (or .mtlx with --to materialx, .usda with --to usd)"
 
 
-def check_output(path, to: str) -> str:
+def check_output(path, to: str, source=None) -> str:
     """The suffix of the output ``path`` of a conversion to ``to``, checked before anything is
     converted (the command line calls it first): one of :data:`OUTPUTS`, ``.gltf`` only for
-    ``to="gltf"``, and its folder an existing directory.  ValueError naming ``out`` otherwise."""
+    ``to="gltf"``, its folder an existing directory, and not the file ``source`` being converted
+    (a Mitsuba scene converted onto itself lost its comments and other BSDFs).  ValueError naming
+    ``out`` otherwise."""
     p = Path(path)
+    if source is not None and p.exists() and Path(str(source)).is_file() and p.samefile(str(source)):
+        raise ValueError(f"out: {str(path)!r} is the source being converted: write the output to another file "
+                         f"(the conversion would replace it)")
     suffix = p.suffix.lower()
     if suffix not in OUTPUTS:
         raise ValueError(f"out: the output file must end in .json, .xml or .gltf{_DCC_SUFFIXES}, got {str(path)!r}")

@@ -256,6 +256,53 @@ def _illum(where, words):
     return n
 
 
+def _statement(cur: MtlMaterial, key: str, words: list, where: str, ln: int) -> None:
+    """Read one statement ``key words`` (line ``ln``, ``where`` for errors) into the material ``cur``."""
+    if key in ("Kd", "Ks"):
+        if words and words[0] in ("spectral", "xyz"):
+            raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b in [0, 1]")
+        setattr(cur, key, _numbers(where, key, words, 0.0, 1.0))
+    elif key == "Ns":
+        cur.Ns = _number(where, "Ns", words, 0.0, NS_MAX)
+        if cur.Ns > 1000:
+            cur.notes.append(f"Ns = {cur.Ns:g} is above the MTL specification's range 0-1000 (read as given)")
+    elif key == "illum":
+        cur.illum = _illum(where, words)
+    elif key in ("d", "Tr"):
+        if words and words[0] == "-halo":
+            cur.notes.append(f"{key} -halo: the dissolve's dependence on the view is not read (a constant)")
+            words = words[1:]
+        cur.dissolve[key] = _number(where, key, words, 0.0, 1.0)
+    elif key == "Ni":
+        v = _float(words)
+        if v is None or v > 10.0:
+            raise ValueError(f"{where}: Ni must be one number in [0, 10] (the index of refraction; 0 or "
+                             f"below, which exporters write for 'not set', is noted, and glass reads 1.5), "
+                             f"got {' '.join(words)!r}")
+        cur.Ni = v      # only glass reads it (Reading.surface): below 1 it warns and reads 1.5
+        if v <= 0.0:
+            cur.notes.append(f"Ni {v:g} is outside the specification's range 0.001-10")
+    elif key in PBR_READ:
+        cur.pbr[key] = _number(where, key, words, 0.0, 1.0)
+    elif key in PBR:    # a zero (no sheen, no coat, no anisotropy) is the BRDF read: a note
+        (cur.notes if _float(words) == 0.0 else cur.warnings).append(
+            f"{key} {' '.join(words)} (MTL's physically based extension: {PBR[key]}) is not read: a PBR "
+            f"material is read as glTF's metallic-roughness BRDF of Kd, Pm and Pr")
+    elif key in ("Ke", "Tf"):
+        if words and words[0] in ("spectral", "xyz"):
+            raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b")
+        setattr(cur, key, _numbers(where, key, words, 0.0, 1e6 if key == "Ke" else 1.0))
+    elif key.startswith("map_") or key in TEXTURES:
+        if not texture_file(words):
+            raise ValueError(f"{where}: {key} needs a file name (after its options), got {' '.join(words)!r}")
+        cur.textures[key] = " ".join(words)
+    elif key in IGNORED:
+        cur.notes.append(f"{key}: {IGNORED[key]}")
+    else:
+        cur.notes.append(f"line {ln}: statement {key!r} is not read (ignored)")
+    cur.given.add(key)
+
+
 def read_mtl(path) -> list[MtlMaterial]:
     """Every ``newmtl`` of the ``.mtl`` file ``path``, in file order.
 
@@ -293,54 +340,12 @@ def read_mtl(path) -> list[MtlMaterial]:
         if cur is None:     # a title line some exporters write (Mineways: "Wavefront OBJ material file")
             before.append((ln, s, key in CANONICAL.values()))
             continue
-        if key in ("Kd", "Ks"):
-            if words and words[0] in ("spectral", "xyz"):
-                raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b in [0, 1]")
-            setattr(cur, key, _numbers(where, key, words, 0.0, 1.0))
-        elif key == "Ns":
-            cur.Ns = _number(where, "Ns", words, 0.0, NS_MAX)
-            if cur.Ns > 1000:
-                cur.notes.append(f"Ns = {cur.Ns:g} is above the MTL specification's range 0-1000 (read as given)")
-        elif key == "illum":
-            cur.illum = _illum(where, words)
-        elif key in ("d", "Tr"):
-            if words and words[0] == "-halo":
-                cur.notes.append(f"{key} -halo: the dissolve's dependence on the view is not read (a constant)")
-                words = words[1:]
-            cur.dissolve[key] = _number(where, key, words, 0.0, 1.0)
-        elif key == "Ni":
-            v = _float(words)
-            if v is None or v > 10.0:
-                raise ValueError(f"{where}: Ni must be one number in [0, 10] (the index of refraction; 0 or "
-                                 f"below, which exporters write for 'not set', is read as not given), "
-                                 f"got {' '.join(words)!r}")
-            cur.Ni = v      # only glass reads it (Reading.surface): below 1 it warns and reads 1.5
-            if v <= 0.0:
-                cur.notes.append(f"Ni {v:g} is outside the specification's range 0.001-10")
-        elif key in PBR_READ:
-            cur.pbr[key] = _number(where, key, words, 0.0, 1.0)
-        elif key in PBR:    # a zero (no sheen, no coat, no anisotropy) is the BRDF read: a note
-            (cur.notes if _float(words) == 0.0 else cur.warnings).append(
-                f"{key} {' '.join(words)} (MTL's physically based extension: {PBR[key]}) is not read: a PBR "
-                f"material is read as glTF's metallic-roughness BRDF of Kd, Pm and Pr")
-        elif key in ("Ke", "Tf"):
-            if words and words[0] in ("spectral", "xyz"):
-                raise ValueError(f"{where}: {key} {words[0]} is not read; give {key} as r g b")
-            setattr(cur, key, _numbers(where, key, words, 0.0, 1e6 if key == "Ke" else 1.0))
-        elif key.startswith("map_") or key in TEXTURES:
-            if not texture_file(words):
-                raise ValueError(f"{where}: {key} needs a file name (after its options), got {' '.join(words)!r}")
-            cur.textures[key] = " ".join(words)
-        elif key in IGNORED:
-            cur.notes.append(f"{key}: {IGNORED[key]}")
-        else:
-            cur.notes.append(f"line {ln}: statement {key!r} is not read (ignored)")
-        cur.given.add(key)
+        _statement(cur, key, words, where, ln)
     if not out:
         raise ValueError(f"MTL file {str(path)!r} defines no material (no newmtl line)")
     for ln, text_, known in before:
         (out[0].warnings if known else out[0].notes).append(
-            f"line {ln}: {text_!r} before the first newmtl belongs to no material: not read")
+            f"line {ln}: {text_!r} before the first newmtl belongs to no material (not read)")
     for first, later in again:
         first.warnings.append(f"material {first.name!r} is defined again at line {later.line}: that definition is "
                               f"not read (the first is kept, as tinyobjloader does; some loaders keep the last)")

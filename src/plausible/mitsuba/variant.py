@@ -70,7 +70,7 @@ def family(request: str | None = None) -> str:
         raise ValueError("no Mitsuba variant can render here (is Mitsuba 3 installed? "
                          "pip install 'plausible[render]')")
     f = req.split("_")[0]
-    if f not in FAMILIES or (req != f and req not in _all_names()):
+    if not is_name(req):
         raise ValueError(f"variant must be auto, cuda, llvm, scalar or a Mitsuba RGB variant name "
                          f"({', '.join(v for v in have if v.endswith('_rgb')) or 'none here'}); got {req!r}")
     if _name(f, "rgb") not in have:
@@ -78,6 +78,14 @@ def family(request: str | None = None) -> str:
         raise ValueError(f"variant {req!r} cannot render on this machine ({why}); variants here: "
                          f"{', '.join(have) or 'none'}")
     return f
+
+
+def is_name(request: str) -> bool:
+    """``request`` names a device (``auto``, ``cuda``, ``llvm``, ``scalar``) or a Mitsuba variant, whether or
+    not it renders here (no Mitsuba import: the command line checks ``$PLAUSIBLE_VARIANT`` with it)."""
+    req = str(request).strip()
+    f = req.split("_")[0]
+    return req == "auto" or (f in FAMILIES and (req == f or req in _all_names()))
 
 
 def _all_names() -> set:
