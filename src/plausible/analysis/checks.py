@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .. import arguments as A
 from ..bxdf import Sample
 from ..progress import start
 from ..text import jsonable
@@ -76,6 +77,9 @@ def reciprocity(model, *, n_theta: int = 12, n_phi: int = 24, tol: float = 1e-9,
     """Max relative asymmetry ``|f(a,b) - f(b,a)| / max(|f(a,b)|, |f(b,a)|)`` over all
     pairs of stratified directions (Helmholtz reciprocity).  Values below
     ``1e-12`` of the largest ``f`` seen are compared absolutely to that floor."""
+    A.count("n_theta", n_theta, 1)
+    A.count("n_phi", n_phi, 1)
+    A.real("tol", tol, 0.0)
     rng = np.random.default_rng(seed)
     d = stratified_directions(n_theta, n_phi, rng)
     a = np.repeat(d, len(d), axis=0)
@@ -172,6 +176,8 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     ``results``: the albedos (:func:`~plausible.integrals.albedo.albedos`) of the
     directions of :func:`energy_directions`, if the caller computed them
     (:func:`plausible.check` does, together with the sampling check's)."""
+    thetas_deg = A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)    # 90: no incidence
+    A.real("tol", tol, 0.0)
     dirs = energy_directions(model, thetas_deg, phis_deg)
     tick = start(progress, len(dirs), f"energy {model.name}")
     wis = [direction(math.radians(t), math.radians(p)) for t, p in dirs]
@@ -244,6 +250,8 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
     theta inner), if the caller computed them (:func:`plausible.check` does, with
     the energy check's albedos); else they are computed here.
     """
+    thetas_deg = A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)
+    n_samples = A.count("n_samples", n_samples, 1)
     rng = np.random.default_rng(seed)
     if is_isotropic(model):
         phis_deg = (0,)

@@ -34,6 +34,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .. import arguments as A
+
 from ..bxdf import Sample
 from ..text import jsonable
 from ..integrals.albedo import pdf_phi_sums_many
@@ -268,6 +270,9 @@ def _fixed_cells(model, wi, n_theta, n_phi, ires=4):
     return t_edges, cells, phi0
 
 
+#: The most samples one incidence of :func:`chi2_many` draws (about 10 GB of directions and weights).
+MAX_SAMPLES = 10 ** 8
+
 def chi2(model, wi, *, n_samples: int = 200_000, n_theta: int = 16, n_phi: int = 16,
          alpha: float = 0.01, n_tests: int = 1, seed: int = 0, min_expected: float = 5.0,
          m: int = 8, method: str = "adaptive", binning=None) -> Chi2Result:
@@ -300,8 +305,13 @@ def chi2_many(model, wis, *, seeds=None, n_samples: int = 200_000, n_theta: int 
             raise ValueError(f"method must be one of {', '.join(map(repr, BINNINGS))}, got {method!r}")
         binning = (AdaptiveBinning(n_theta, n_phi, m) if method == "adaptive"
                    else FixedBinning(n_theta, n_phi))
-    if n_samples < 1000:
-        raise ValueError(f"n_samples must be >= 1000, got {n_samples}")
+    # 1e8 samples of one incidence are ~10 GB of directions and weights: beyond, a MemoryError deep inside
+    n_samples = A.count("n_samples", n_samples, 1000, MAX_SAMPLES)
+    A.count("n_theta", n_theta, 1)
+    A.count("n_phi", n_phi, 1)
+    A.count("n_tests", n_tests, 1)
+    alpha = A.probability("alpha", alpha)
+    A.real("min_expected", min_expected, 0.0, open_lo=True)      # a pool below 0 gave a NaN statistic
     wis = [np.asarray(wi, dtype=np.float64) for wi in wis]
     wis = [wi / np.linalg.norm(wi) for wi in wis]
     seeds = list(range(len(wis))) if seeds is None else list(seeds)

@@ -13,10 +13,11 @@ from ..arrays.backend import eager
 from ..integrals.albedo import (TOL as ALBEDO_TOL, albedos, direction, is_isotropic, pdf_integrals,
                                 quadrature_reach)
 from ..progress import start, within
+from .. import arguments as A
 from ..text import jsonable
 from .checks import (ENERGY_THETAS, GUARD_SAMPLES, QUICK_ALBEDO_TOL, PropertyResult, energy, energy_directions,
                      grazing_thetas, reciprocity, sampling_consistency, value_problem)
-from .chi2 import AdaptiveBinning, chi2_many
+from .chi2 import MAX_SAMPLES, AdaptiveBinning, chi2_many
 
 #: The chi-square cells of ``check(quick=True)`` have settled when a refinement changes
 #: each cell's expected fraction by at most this times the mean cell's
@@ -157,6 +158,8 @@ def check(model, *, alpha: float = 0.001, n_samples: int = 200_000, quick: bool 
     a :mod:`plausible.progress` factory, announced once with every step of every
     property and ticked after each.
     """
+    alpha = A.probability("alpha", alpha)
+    A.count("n_samples", n_samples, 4000, MAX_SAMPLES)     # quick mode's chi-square draws a quarter
     model = as_bxdf(model)
     views = [("", model)] + list(model.views() if hasattr(model, "views") else [])
     rep = CheckReport(model.name, jsonable(model.params), notes=list(getattr(model, "notes", [])))

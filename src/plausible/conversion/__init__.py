@@ -53,6 +53,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import arguments as A
+
 from .mitsuba import CONSERVE_THETAS, PROBE_THETAS, REPORT_THETAS
 from .textures import GLTF_TEXTURE_SLOTS, prepare
 
@@ -434,6 +436,7 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
 
     if metric not in M.METRICS:
         raise ValueError(f"metric must be one of {', '.join(M.METRICS)}, got {metric!r}")
+    A.count("starts", starts, 1)            # as plausible.fit (0 was taken)
     to = str(to).strip()
     family = None
     if to in GLTF_SHAPED:

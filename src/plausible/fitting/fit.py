@@ -66,6 +66,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from .. import arguments as A
 from .. import registry
 from ..analysis import albedo_curve, direction
 from ..bxdf import BxDF, Params
@@ -256,8 +257,12 @@ def _fit(model_name, target, metric, fixed, starts, seed, time_limit, progress, 
     if not (math.isfinite(highlight) and highlight >= 0.0):
         raise ValueError(f"highlight must be a finite weight >= 0 (0: the plain metric), got {highlight!r}")
     M.check_combine(combine)
-    if starts < 1:
-        raise ValueError(f"starts must be >= 1, got {starts}")
+    A.count("starts", starts, 1)
+    A.count("seed", seed, 0)                # NumPy's generators take seeds >= 0
+    A.count("maxiter", maxiter, 1)
+    if time_limit is not None:              # 0: the start, timed out; -1 was taken as 0 and NaN ignored
+        A.real("time_limit", time_limit, 0.0)
+    A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)
     t0 = time.monotonic()
     info = registry.info(model_name)
     fixed = dict(fixed or {})

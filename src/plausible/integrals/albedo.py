@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import arguments as A
 from ..arrays import backend as _backend
 from ..arrays.quadrature_sums import tensor_sums
 from ..bxdf import BxDF
@@ -86,6 +87,8 @@ ORDERS = (4, 6, 8, 12, 16)
 MAX_REFINE = 4
 #: Default accuracy asked of :func:`albedo` (absolute, on the error bound).
 TOL = 1e-6
+#: Most levels of grading toward the lobe (``levels``, default 13): panels down to ``2^-60`` of the range.
+MAX_LEVELS = 60
 #: A polar segment that starts at a cut (a lune, a kink) at least ``2^-LIGHT_POLE_LEVELS`` of its
 #: length away from the mirror direction takes the ``s`` rule without the pole's finer grading: its
 #: panels near its start are then no larger than their distance to the pole, as the whole rule's
@@ -544,6 +547,7 @@ def _copy(r: AlbedoResult) -> AlbedoResult:
 def _results(model, kind, wis, tol, levels):
     """:func:`_integrate` for any incidences (zero below the horizon), as results
     (remembered within :func:`remembering`)."""
+    A.count("levels", levels, 1, MAX_LEVELS)
     zero = np.zeros(model.channels) if (kind == "f" and model.channels) else 0.0
     memory = _MEMORY
     mk = exact_text(model) if memory is not None else None
@@ -679,6 +683,9 @@ def hemispherical_albedo(model, *, n_theta: int = 16, n_phi: int | None = None) 
     by Gauss-Legendre in ``mu = cos(theta_i)`` (and in azimuth for anisotropic models)."""
     from .quadrature import gauss_legendre
 
+    A.count("n_theta", n_theta, 1)
+    if n_phi is not None:
+        A.count("n_phi", n_phi, 1)
     x, w = gauss_legendre(n_theta)
     mu = 0.5 * (x + 1.0)
     wmu = 0.5 * w * 2.0 * mu  # 2 mu d mu on [0, 1]
