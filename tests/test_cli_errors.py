@@ -200,3 +200,17 @@ def test_a_bsdf_file_mitsuba_cannot_load_is_refused_naming_the_file(tmp_path, xm
     r = run("convert", tmp_path / "b.xml", "--to", "mitsuba", "--out", tmp_path / "x.json")
     assert r.exit_code == 2 and "Mitsuba cannot load it" in r.output and words in r.output, r.output
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_host_that_is_no_address_is_said_to_be_the_host():
+    # before: "... choose another port) with --port" for a host name that does not resolve
+    r = run("explore", "--host", "not a host", "--no-browser") if "--no-browser" in run("explore", "--help").output \
+        else run("explore", "--host", "not a host")
+    assert r.exit_code == 2 and "--host: give a name or address of this machine" in r.output, r.output
+    assert "port" not in r.output.split("(")[-1]
+
+
+def test_an_unknown_convert_target_lists_the_targets_beside_the_models():
+    r = run("convert", "ward", "--to", "nope", "--out", "x.json")
+    assert r.exit_code == 2 and "unknown model 'nope'" in r.output and "or a target: mitsuba, mitsuba:TYPE" in r.output
+    assert "gltf" in r.output.split("or a target:")[1]

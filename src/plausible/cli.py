@@ -1220,8 +1220,8 @@ def explore(port, host, no_browser):
     host, exposed = resolve_host(host)  # '' is loopback; only a named address exposes the explorer
     try:
         sock = bind(host, port)         # before the URL is announced: a busy port fails here
-    except ValueError as e:
-        _fail(f"{e} with --port")
+    except ValueError as e:       # the library's "host:" / "choose another port" said as the options
+        _fail(str(e).replace("(host: ", "(--host: ").replace("choose another port", "choose another --port"))
     if exposed:
         console.print(f"[bold red]WARNING: --host {host} makes the explorer reachable from the network: other "
                       f"machines can connect to port {port} (leave --host out for this machine only)[/]", soft_wrap=True)

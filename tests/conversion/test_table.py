@@ -252,3 +252,13 @@ def test_a_row_outside_the_band_without_its_warning_is_caught():
     wrong = {**_looked("nickel", [2.0, 1.0, 1.0, 1.0]), "looks_warnings": ["highlight lost: 0.5x"]}
     assert [k for k, _ in table.unwarned([silent, wrong])] == [table.key(silent), table.key(wrong)]
     assert "without their warning" in table.markdown({table.key(silent): silent})
+
+
+def test_an_unknown_fit_set_is_refused_with_the_loadable_ones_listed():
+    from plausible import catalogue
+    from plausible.conversion.table import jobs
+
+    with pytest.raises(ValueError) as e:
+        jobs(fits=["nope"])
+    listed = str(e.value).split("the loadable ones are ")[1].split(", ")
+    assert listed == [fs.key for fs in catalogue.fits() if fs.built] and len(listed) > 1   # was empty

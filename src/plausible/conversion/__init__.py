@@ -452,7 +452,12 @@ def convert(source, to: str = "mitsuba", metric: str = "perceptual", *, starts: 
     elif to != "mitsuba" and to not in GLTF_SHAPED:
         from .. import registry
 
-        registry.info(to)    # a clear error for an unknown name
+        try:
+            registry.info(to)    # a clear error for an unknown name
+        except ValueError as e:  # the targets beside the models (the message listed the models alone)
+            raise ValueError(f"to: {e}; or a target: mitsuba, mitsuba:TYPE "
+                             f"({', '.join(k for k in CM.FAMILIES if k not in CM.PLAUSIBLE_TYPES)}), "
+                             f"{', '.join(GLTF_SHAPED)}") from None
     from threadpoolctl import threadpool_limits
 
     items, skipped = [], []

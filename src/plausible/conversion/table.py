@@ -40,11 +40,13 @@ def jobs(targets=TARGETS, per_set: int | None = None, fits=None) -> list[tuple]:
     robin over the fit sets (module docstring)."""
     from .. import catalogue
 
-    sets = [fs.key for fs in catalogue.fits() if fs.built and (fits is None or fs.key in fits)]
+    loadable = [fs.key for fs in catalogue.fits() if fs.built]
+    sets = [k for k in loadable if fits is None or k in fits]
     if fits is not None:
         unknown = sorted(set(fits) - set(sets))
-        if unknown:
-            raise ValueError(f"fits: no loadable fit set {', '.join(unknown)}; the loadable ones are {', '.join(sets)}")
+        if unknown:     # the list of all loadable sets (it was the requested ones found: empty for a typo)
+            raise ValueError(f"fits: no loadable fit set {', '.join(unknown)}; the loadable ones are "
+                             f"{', '.join(loadable)}")
     names = {k: sorted(catalogue.materials(k))[:per_set] for k in sets}
     out = []
     for i in range(max((len(v) for v in names.values()), default=0)):

@@ -54,6 +54,9 @@ def bind(host: str = "127.0.0.1", port: int = 8765):
         sock.listen(2048)
     except OSError as e:
         sock.close()
+        if isinstance(e, socket.gaierror):      # the host is no name or address of this machine
+            raise ValueError(f"cannot listen on {host}:{port}: {e.strerror} (host: give a name or address of "
+                             f"this machine, such as 127.0.0.1 or 0.0.0.0)") from None
         raise ValueError(f"cannot listen on {host}:{port}: {e.strerror} (another program, or another "
                          f"explorer, may hold the port: choose another port)") from None
     sock.set_inheritable(True)
