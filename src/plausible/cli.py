@@ -1107,6 +1107,13 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
     from .fitting.batch_report import write_report
 
     _no_stdout(out, "fit-batch writes a results folder (OUT/fits/MODEL.csv)")
+    unknown = [s for s in spheres if s not in targets]
+    if unknown:             # was ignored: the report drew no sphere for it
+        _fail(f"--spheres: {', '.join(map(repr, unknown))} is not one of the TARGETS ({', '.join(targets)})")
+    if report:              # its folder made before the fits (an unwritable one was refused only after them)
+        from pathlib import Path
+
+        Path(report).mkdir(parents=True, exist_ok=True)
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
     bad = []
@@ -1147,6 +1154,8 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
         first = [t for t in targets][:1]
         p = write_report(out, report, spheres=list(spheres) or first)
         console.print(f"wrote {escape(str(p))}")
+    if s.failed:            # every fit that could run is written; the failed ones are rows with their error
+        raise SystemExit(1)
 
 
 def _no_stdout(out, what):

@@ -229,3 +229,24 @@ def test_fit_batch_on_a_dask_scheduler_gives_the_rows_of_one_process(tmp_path):
     assert (ref.done, s.done, s.workers) == (2, 2, 2)
     got = {r["target"]: r["params"]["rd"] for r in batch.load_results(tmp_path / "dask")}
     assert got == {r["target"]: r["params"]["rd"] for r in batch.load_results(tmp_path / "one")}
+
+
+# -- an outside audit of bad input: a failed fit, a sphere that is no target, a report that cannot be written --
+
+def test_a_batch_with_a_failed_fit_writes_its_row_and_exits_1(tmp_path):
+    r = CliRunner().invoke(main, ["fit-batch", "nope-not-a-target", "lambertian:rd=0.5", "--models", "lambertian",
+                                  "--metrics", "l2-cos", "--out", str(tmp_path), "--workers", "0", "--starts", "1"])
+    assert r.exit_code == 1, r.output                         # was 0 with the failure in the log only
+    rows = {x["target"]: x["status"] for x in batch.load_results(tmp_path)}
+    assert rows["lambertian:rd=0.5"] == "ok" and rows["nope-not-a-target"] != "ok"
+
+
+def test_spheres_that_are_no_target_and_an_unwritable_report_are_refused_before_any_fit(tmp_path):
+    args = ["fit-batch", "lambertian:rd=0.5", "--models", "lambertian", "--metrics", "l2-cos", "--out",
+            str(tmp_path / "res"), "--workers", "0", "--starts", "1"]
+    r = CliRunner().invoke(main, args + ["--report", str(tmp_path / "rep"), "--spheres", "nope"])
+    assert r.exit_code == 2 and "--spheres: 'nope' is not one of the TARGETS" in r.output, r.output
+    (tmp_path / "file").write_text("x")
+    r = CliRunner().invoke(main, args + ["--report", str(tmp_path / "file" / "rep")])
+    assert r.exit_code == 2 and "cannot use" in r.output, r.output
+    assert not (tmp_path / "res").exists() or not batch.load_results(tmp_path / "res")     # no fit ran
