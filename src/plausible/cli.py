@@ -1062,9 +1062,11 @@ def convert_table_cmd(out, to, fits, per_set, limit, workers, md, redo, schedule
                       "run the same command again to resume", soft_wrap=True)
         sys.exit(130)
     except ValueError as e:
-        _fail(_scheduler_flag(e).replace("fits: ", "--fits: ").replace("workers ", "--workers "))
+        _fail(_scheduler_flag(e).replace("fits: ", "--fits: ").replace("workers ", "--workers ")
+              .replace("redo: ", "--redo: "))
     for b in problems:
-        console.print(f"[yellow]dropped a duplicated row[/yellow] {escape(b)}", soft_wrap=True)
+        what = "dropped a duplicated row" if "a second row of" in b else "skipped a damaged line"
+        console.print(f"[yellow]{what}[/yellow] {escape(b)}", soft_wrap=True)
     for s in runs:
         _shared_note(s, "conversions", out)
     all_jobs = table.jobs(targets, per_set, fits_)

@@ -121,8 +121,9 @@ def test_rows_of_a_redone_fit_set_or_material_are_converted_again_in_job_order(t
     table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward", "ngan2005/blinn-phong"],
                     redo=["ngan2005/ward", one])
     assert calls == [js[1], js[2], js[3]]
-    # a redo that names nothing in the table converts nothing
-    table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward", "ngan2005/blinn-phong"], redo=["x/y"])
+    # a redo that names nothing in the table converts nothing, and says so (it was silent)
+    with pytest.raises(ValueError, match="redo: 'x/y' names no target"):
+        table.run_table(path, ("mitsuba",), per_set=2, fits=["ngan2005/ward", "ngan2005/blinn-phong"], redo=["x/y"])
     assert len(calls) == 3
 
 
@@ -262,3 +263,21 @@ def test_an_unknown_fit_set_is_refused_with_the_loadable_ones_listed():
         jobs(fits=["nope"])
     listed = str(e.value).split("the loadable ones are ")[1].split(", ")
     assert listed == [fs.key for fs in catalogue.fits() if fs.built] and len(listed) > 1   # was empty
+
+
+def test_a_redo_that_names_nothing_of_the_table_is_refused(tmp_path):
+    # an outside audit: --redo nope was ignored (nothing redone, no word of it)
+    with pytest.raises(ValueError, match="redo: 'nope' names no target, fit set or material"):
+        table.run_table(tmp_path / "t.jsonl", ("mitsuba",), per_set=1, fits=["ngan2005/ward"], redo=["nope"],
+                        row=lambda job: _fake_row(job))
+    assert not (tmp_path / "t.jsonl").exists()
+
+
+def test_a_damaged_line_is_reported_and_its_conversion_made_again(tmp_path, monkeypatch):
+    path = tmp_path / "t.jsonl"
+    a = json.dumps(_fake_row(("mitsuba", "ngan2005/ward", "alum-bronze")))
+    path.write_text("\n".join([a, '{"to": "mitsuba", "fit": "ngan2005/wa', a[:20] + "}"]) + "\n")
+    problems = []
+    rows = table.read_rows(path, problems)
+    assert len(rows) == 1 and len(problems) == 2                     # were skipped without a word
+    assert problems[0].startswith(f"{path}:2: not a row of this table") and problems[1].startswith(f"{path}:3:")

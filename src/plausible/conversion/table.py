@@ -177,7 +177,10 @@ class _Rows:
         for text in lines:
             self.line += 1
             r = _row(text.encode())
-            if r is None:
+            if r is None:       # a damaged line (a whole one: a cut last line is not read yet)
+                if problems is not None and text.strip():
+                    problems.append(f"{self.path}:{self.line}: not a row of this table (not JSON, or no "
+                                    f"to/fit/material); ignored, its conversion is made again")
                 continue
             k = key(r)
             if k in self.rows and self.rows[k].get("code") == r.get("code"):
@@ -249,6 +252,14 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
         return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
 
     every = list(todo_jobs) if todo_jobs is not None else jobs(targets, per_set, fits)
+    from .mitsuba import FAMILIES
+
+    names = ({j[0] for j in every} | {j[1] for j in every} | {key(j).split(" ", 1)[1] for j in every}
+             | {r.get("target") for r in done.values()} | {f"mitsuba:{k}" for k in FAMILIES} | {"gltf"})
+    unknown = sorted(redo - names)
+    if unknown:     # was ignored: nothing redone, and no word of it
+        raise ValueError(f"redo: {', '.join(map(repr, unknown))} names no target, fit set or material "
+                         f"(material:NAME@FIT) of this table")
     again = [j for j in every if key(j) in done and wanted(j) and done[key(j)].get("code") != code_version()]
     todo = again + [j for j in every if key(j) not in done]
     if limit is not None:
