@@ -53,6 +53,9 @@ Z = direction(0.3)
     (lambda: plausible.fit("ward", "ward:alpha_x=0.2", time_limit=-1), "time_limit must be"),  # the start returned
     (lambda: plausible.fit("ward", "ward:alpha_x=0.2", thetas_deg=()), "thetas_deg must hold"),
     (lambda: plausible.convert("ward:alpha_x=0.2", to="ward", starts=0), "starts must be"),
+    (lambda: plausible.direction("a"), "theta and phi must be angles in radians"),   # NumPy's "could not convert"
+    (lambda: plausible.albedo("ward", Z), "pass plausible.make('ward')"),            # an AttributeError
+    (lambda: plausible.albedo(lambda wi, wo: 1.0, Z), "model must have the contract's eval"),
 ])
 def test_bad_arguments_are_refused_naming_them(call, words):
     with pytest.raises(ValueError) as e:

@@ -128,8 +128,12 @@ def direction(theta, phi=0.0):
     """
     import numpy as np
 
-    t = np.asarray(theta, dtype=np.float64)
-    p = np.asarray(phi, dtype=np.float64)
+    try:
+        t = np.asarray(theta, dtype=np.float64)
+        p = np.asarray(phi, dtype=np.float64)
+    except (TypeError, ValueError):     # a string, None, a ragged list: NumPy's "could not convert"
+        raise ValueError(f"theta and phi must be angles in radians (numbers or arrays of them), got "
+                         f"theta={theta!r}, phi={phi!r}") from None
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
         raise ValueError(f"theta and phi must be finite angles in radians, got theta={theta!r}, phi={phi!r}")
     if np.any(t < 0) or np.any(t > math.pi):

@@ -548,6 +548,12 @@ def _results(model, kind, wis, tol, levels):
     """:func:`_integrate` for any incidences (zero below the horizon), as results
     (remembered within :func:`remembering`)."""
     A.count("levels", levels, 1, MAX_LEVELS)
+    if isinstance(model, str):          # was an AttributeError about 'channels'
+        raise ValueError(f"model must be a model object, got the string {model!r}: pass plausible.make({model!r}) "
+                         f"(plausible.check takes a spec string; the integrals take the model)")
+    if not callable(getattr(model, "eval", None)):
+        raise ValueError(f"model must have the contract's eval(wi, wo) (a plausible model, or "
+                         f"plausible.analysis.as_bxdf(obj) of a Mitsuba BSDF or a callable), got {type(model).__name__}")
     zero = np.zeros(model.channels) if (kind == "f" and model.channels) else 0.0
     memory = _MEMORY
     mk = exact_text(model) if memory is not None else None
