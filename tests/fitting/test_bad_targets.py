@@ -40,6 +40,15 @@ def test_csv_non_finite_direction_and_zero_vector(tmp_path):
         load_table(_csv(tmp_path, "0,0,0,0.6,0,0.8,0.3\n"))
 
 
+def test_csv_row_with_a_value_below_the_horizon_is_refused_and_one_of_zero_kept(tmp_path):
+    # an outside audit: a row with wi = (0, 0, -1) and f > 0 was fitted silently
+    p = _csv(tmp_path, HEADER + GOOD + "0,0,-1,0.6,0,0.8,0.3\n")
+    with pytest.raises(ValueError, match=rf"{p}:3: wi = \(0, 0, -1\) is at or below the horizon"):
+        load_table(p)
+    wi, wo, f = load_table(_csv(tmp_path, HEADER + GOOD + "0,0,1,0.6,0,-0.8,0\n", "z.csv"))   # f = 0 there: kept
+    assert len(f) == 2
+
+
 def test_ragged_csv_names_the_line(tmp_path):
     p = _csv(tmp_path, HEADER + GOOD + GOOD + "0,0,1,0.6,0,0.8\n")
     with pytest.raises(ValueError, match=f"{p}:4: 6 columns where the rows above have 7"):
@@ -59,8 +68,11 @@ def test_a_second_text_line_is_not_a_header(tmp_path):
 
 
 def test_all_rows_below_the_horizon(tmp_path):
-    p = _csv(tmp_path, HEADER + "0,0,-1,0.6,0,0.8,0.3\n0.6,0,0.8,0,0,-1,0.3\n")
+    p = _csv(tmp_path, HEADER + "0,0,-1,0.6,0,0.8,0\n0.6,0,0.8,0,0,-1,0\n")
     with pytest.raises(ValueError, match="no sample has both wi and wo above the horizon"):
+        as_target(p)
+    p = _csv(tmp_path, HEADER + "0,0,-1,0.6,0,0.8,0.3\n0.6,0,0.8,0,0,-1,0.3\n", "f.csv")   # a value there: the row
+    with pytest.raises(ValueError, match=r"f.csv:2: wi = \(0, 0, -1\) is at or below the horizon"):
         as_target(p)
 
 

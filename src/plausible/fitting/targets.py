@@ -103,7 +103,8 @@ F_MAX = 1e150
 
 
 def _check_row(where, row):
-    """A table row: finite numbers, non-zero directions, ``f >= 0``."""
+    """A table row: finite numbers, non-zero directions, ``f >= 0``, and ``f = 0`` where a direction is at or below
+    the horizon (the contract's reflection BRDF is zero there)."""
     names = _COLUMNS + (("f",) if len(row) == 7 else ("f_r", "f_g", "f_b"))
     for name, v in zip(names, row):
         if not math.isfinite(v):
@@ -117,6 +118,11 @@ def _check_row(where, row):
         if v > F_MAX:
             raise ValueError(f"{where}: column {name} (the BRDF value) must lie in [0, {F_MAX:g}] "
                              f"(the metrics square it), got {v:g}")
+    for w, name in ((row[:3], "wi"), (row[3:6], "wo")):     # was fitted as if it were above
+        if w[2] <= 0 and any(v > 0 for v in row[6:]):
+            raise ValueError(f"{where}: {name} = ({w[0]:g}, {w[1]:g}, {w[2]:g}) is at or below the horizon "
+                             f"(z <= 0), where a reflection BRDF is 0, but the row's value is not (give z > 0, "
+                             f"or f = 0)")
 
 
 def _binary_note(path) -> str:
