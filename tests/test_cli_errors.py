@@ -214,3 +214,9 @@ def test_an_unknown_convert_target_lists_the_targets_beside_the_models():
     r = run("convert", "ward", "--to", "nope", "--out", "x.json")
     assert r.exit_code == 2 and "unknown model 'nope'" in r.output and "or a target: mitsuba, mitsuba:TYPE" in r.output
     assert "gltf" in r.output.split("or a target:")[1]
+
+
+def test_p_with_a_foreign_bsdf_is_refused():
+    pytest.importorskip("mitsuba")
+    r = run("check", "--mitsuba", '{"type": "diffuse"}', "-p", "rs=0.5", "--quick")
+    assert r.exit_code == 2 and "-p sets the parameters of a registered MODEL" in r.output, r.output  # was ignored

@@ -442,6 +442,9 @@ def check(model, params, as_json, all_models, quick, verbose, mitsuba_dict, mits
         return _check_materials(all_materials, fit_keys, material_names, out_dir, (jobs, scheduler), quick, as_json,
                                 model or all_models or params or mitsuba_dict or mitsuba_xml or python_obj)
     foreign = _foreign_bsdf(mitsuba_dict, mitsuba_xml, bsdf_id, python_obj, model or all_models)
+    if foreign is not None and params:      # was ignored: the report showed the BSDF's own parameters
+        _fail("-p sets the parameters of a registered MODEL; a --mitsuba dict, --mitsuba-xml file or --python "
+              "object carries its own (put them in the dict or the XML)")
     if not model and not all_models and foreign is None:
         _fail("give a MODEL, --all, --mitsuba, --mitsuba-xml or --python")
     if all_models and (model or params):
