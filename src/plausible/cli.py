@@ -1112,13 +1112,6 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
     from .fitting.batch_report import write_report
 
     _no_stdout(out, "fit-batch writes a results folder (OUT/fits/MODEL.csv)")
-    unknown = [s for s in spheres if s not in targets]
-    if unknown:             # was ignored: the report drew no sphere for it
-        _fail(f"--spheres: {', '.join(map(repr, unknown))} is not one of the TARGETS ({', '.join(targets)})")
-    if report:              # its folder made before the fits (an unwritable one was refused only after them)
-        from pathlib import Path
-
-        Path(report).mkdir(parents=True, exist_ok=True)
     models_ = [m.strip() for m in models.split(",") if m.strip()]
     metrics_ = [m.strip() for m in metrics.split(",") if m.strip()]
     bad = []
@@ -1127,6 +1120,16 @@ def fit_batch_cmd(targets, models, metrics, out, scheduler, workers, starts, see
                           time_limit=time_limit, retry_failed=retry_failed, problems=bad)
     except ValueError as e:
         _fail(str(e))
+    if spheres:             # was ignored: the report drew no sphere for a name it does not know
+        known = set(targets) | {r["target"] for r in batch.load_results(out)}    # this run's and the folder's
+        unknown = [s for s in spheres if s not in known]
+        if unknown:
+            _fail(f"--spheres: {', '.join(map(repr, unknown))} is not one of the TARGETS ({', '.join(targets)}) "
+                  f"nor fitted in {out}")
+    if report:              # its folder made before the fits (an unwritable one was refused only after them)
+        from pathlib import Path
+
+        Path(report).mkdir(parents=True, exist_ok=True)
     for b in bad:       # malformed rows: skipped (their fits run again), the good rows kept
         console.print(f"[yellow]skipped a malformed row[/yellow] {escape(b)}", soft_wrap=True)
     failed = [0]

@@ -269,3 +269,20 @@ def test_energy_fails_a_function_that_is_no_brdf_by_name(cls, words):
 def test_chi2_fails_a_pdf_that_is_not_finite():
     r = chi2(make(NanPdf, n=30), direction(math.radians(30)), n_samples=20_000)
     assert not r.passed and "not finite" in r.message, r.message     # before: passed, p-value 1
+
+
+class RoundsToNegative(ReciprocalPhong):
+    """Reciprocal Phong with -1e-17 where it is exactly 0 (the rounding of a formula): still a BRDF."""
+
+    def _f(self, ops, wi, wo, p):
+        f = super()._f(ops, wi, wo, p)
+        return ops.where(f == 0.0, -1e-17, f)
+
+
+def test_rounding_below_zero_is_no_negative_brdf_and_the_full_check_takes_few_samples():
+    # a second reader: the first floor (f < 0) failed such a model; and check() asked quick mode's 4000
+    # samples of the full check too (its chi-square needs 1000)
+    from plausible.analysis.checks import value_problem
+    assert value_problem(make(RoundsToNegative, n=20), [direction(0.0), direction(1.2)]) is None
+    assert "f is negative" in value_problem(make(Negative, n=20), [direction(0.0)])
+    assert plausible.check(plausible.make("lambertian"), n_samples=2000).passed

@@ -281,3 +281,13 @@ def test_a_damaged_line_is_reported_and_its_conversion_made_again(tmp_path, monk
     rows = table.read_rows(path, problems)
     assert len(rows) == 1 and len(problems) == 2                     # were skipped without a word
     assert problems[0].startswith(f"{path}:2: not a row of this table") and problems[1].startswith(f"{path}:3:")
+
+
+def test_a_redo_of_a_whole_target_converts_its_rows_again(tmp_path):
+    # a second reader: "mitsuba" passed the name check but matched no row (rows hold the chosen family)
+    calls = []
+    path = tmp_path / "t.jsonl"
+    job = ("mitsuba", "ngan2005/ward", "alum-bronze")
+    path.write_text(json.dumps({**_fake_row(job), "target": "mitsuba:diffuse", "code": "old"}) + "\n")
+    table.run_table(path, todo_jobs=[job], redo=["mitsuba"], row=lambda j: calls.append(j) or _fake_row(j))
+    assert calls == [job]

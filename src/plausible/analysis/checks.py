@@ -148,10 +148,12 @@ def value_problem(model, wis, seed: int = 5):
         return (f"f is not finite ({', '.join(f'{x:g}' for x in f[k])}) at wi = {np.round(a[k], 4).tolist()}, "
                 f"wo = {np.round(b[k], 4).tolist()} ({int((~finite).sum())} of {len(a)} pairs): no BRDF")
     low = f.min(axis=1)
-    if low.min() < 0.0:
+    floor = -1e-12 * max(float(np.max(np.abs(f))), 1e-300)     # rounding of an exact 0 is no negative BRDF
+    if low.min() < floor:
         k = int(np.argmin(low))
         return (f"f is negative ({low[k]:.6g}) at wi = {np.round(a[k], 4).tolist()}, wo = "
-                f"{np.round(b[k], 4).tolist()} ({int((low < 0).sum())} of {len(a)} pairs): no BRDF (a BRDF is >= 0)")
+                f"{np.round(b[k], 4).tolist()} ({int((low < floor).sum())} of {len(a)} pairs): no BRDF (a BRDF is "
+                f">= 0)")
     return None
 
 

@@ -521,7 +521,7 @@ def _pbr_spec(m: MtlMaterial, notes: list) -> str:
         roughness, how = 0.01, how + "; raised to the model's smallest, 0.01"
     notes.append(f"the PBR extension (Pr/Pm): glTF's metallic-roughness BRDF of base colour Kd, metallic "
                  f"{metallic:g}{'' if 'Pm' in m.pbr else ' (Pm not given)'}, roughness {roughness:.6g} ({how}); "
-                 f"Ks, Ns and illum {m.illum} not read")
+                 f"Ks, Ns{'' if m.illum == 10 else f' and illum {m.illum}'} not read")
     return f"gltf-pbr:base_color={_spec_colour(m.Kd)}:metallic={metallic!r}:roughness={roughness!r}"
 
 

@@ -180,7 +180,7 @@ class _Rows:
             if r is None:       # a damaged line (a whole one: a cut last line is not read yet)
                 if problems is not None and text.strip():
                     problems.append(f"{self.path}:{self.line}: not a row of this table (not JSON, or no "
-                                    f"to/fit/material); ignored, its conversion is made again")
+                                    f"to/fit/material); ignored (a conversion it held is made again)")
                 continue
             k = key(r)
             if k in self.rows and self.rows[k].get("code") == r.get("code"):
@@ -249,7 +249,7 @@ def run_table(path, targets=TARGETS, *, per_set: int | None = None, fits=None, l
 
     def wanted(j):
         r = done[key(j)]
-        return bool({r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
+        return bool({r.get("to"), r.get("target"), r.get("fit"), key(j).split(" ", 1)[1]} & redo)
 
     every = list(todo_jobs) if todo_jobs is not None else jobs(targets, per_set, fits)
     from .mitsuba import FAMILIES

@@ -6,6 +6,7 @@ spec, a MERL file or a table; the CSV tables of :func:`load_table` and
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -103,8 +104,7 @@ F_MAX = 1e150
 
 
 def _check_row(where, row):
-    """A table row: finite numbers, non-zero directions, ``f >= 0``, and ``f = 0`` where a direction is at or below
-    the horizon (the contract's reflection BRDF is zero there)."""
+    """A table row: finite numbers, non-zero directions, ``f >= 0``."""
     names = _COLUMNS + (("f",) if len(row) == 7 else ("f_r", "f_g", "f_b"))
     for name, v in zip(names, row):
         if not math.isfinite(v):
@@ -118,11 +118,6 @@ def _check_row(where, row):
         if v > F_MAX:
             raise ValueError(f"{where}: column {name} (the BRDF value) must lie in [0, {F_MAX:g}] "
                              f"(the metrics square it), got {v:g}")
-    for w, name in ((row[:3], "wi"), (row[3:6], "wo")):     # was fitted as if it were above
-        if w[2] <= 0 and any(v > 0 for v in row[6:]):
-            raise ValueError(f"{where}: {name} = ({w[0]:g}, {w[1]:g}, {w[2]:g}) is at or below the horizon "
-                             f"(z <= 0), where a reflection BRDF is 0, but the row's value is not (give z > 0, "
-                             f"or f = 0)")
 
 
 def _binary_note(path) -> str:
@@ -225,6 +220,12 @@ def _table_target(wi, wo, f, label, target_albedo):
     if not ok.any():
         raise ValueError(f"{label}: no sample has both wi and wo above the horizon (z > 0); "
                          f"the {len(f)} rows all lie on or below it")
+    lost = ~ok & (f.reshape(len(f), -1) > 0).any(axis=1)
+    if lost.any():      # dropped (a reflection BRDF is 0 there), but a value there was measured: said, not silent
+        k = int(np.argmax(lost))
+        warnings.warn(f"{label}: {int(lost.sum())} of {len(f)} rows have a direction on or below the horizon "
+                      f"(z <= 0) and f > 0 (first: row {k}, wi = {np.round(wi[k], 6).tolist()}, wo = "
+                      f"{np.round(wo[k], 6).tolist()}): dropped, as a reflection BRDF is 0 there", stacklevel=3)
     th = A = None
     if target_albedo is not None:
         th = np.radians(np.asarray(target_albedo[0], float))
