@@ -220,3 +220,8 @@ def test_p_with_a_foreign_bsdf_is_refused():
     pytest.importorskip("mitsuba")
     r = run("check", "--mitsuba", '{"type": "diffuse"}', "-p", "rs=0.5", "--quick")
     assert r.exit_code == 2 and "-p sets the parameters of a registered MODEL" in r.output, r.output  # was ignored
+
+
+def test_log_without_plot_is_refused():
+    r = run("albedo", "lambertian", "--log")
+    assert r.exit_code == 2 and "--log sets the albedo axis of --plot FILE" in r.output, r.output   # was ignored

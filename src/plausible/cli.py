@@ -764,6 +764,8 @@ def albedo(models, params, plot, phi, points, as_json, log_axis):
     """
     from .plotting import check_image_path, default_thetas, plot_albedo_curves
 
+    if log_axis and plot is None:   # was ignored: the table has no axis
+        _fail("--log sets the albedo axis of --plot FILE; give --plot (the printed table has no axis)")
     if plot is not None:    # before the work: a path that cannot be written ('' included) fails now
         try:
             check_image_path(plot, "--plot")
