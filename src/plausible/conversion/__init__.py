@@ -506,8 +506,6 @@ def _glass(src, to: str) -> Converted:
     (glTF tints the transmission by it); not fitted (no error figures, no albedo)."""
     from .. import registry
 
-    from .mtl import NOTED_TEXTURES
-
     sf = src.surface
     notes = list(src.notes) + ["glass: converted by its statements, not fitted (no error figures)"]
     warnings = list(src.warnings)
@@ -516,8 +514,7 @@ def _glass(src, to: str) -> Converted:
             notes.append(f"{stmt} {value}: the glass's {GLTF_TEXTURE_SLOTS[stmt]} (glTF tints the transmission by "
                          f"the base colour)")
         else:
-            (notes if stmt in NOTED_TEXTURES else warnings).append(
-                f"{stmt} {value}: dropped, carried by reference only (glass is converted by its Ni and Tf)")
+            _dropped(stmt, value, "glass is converted by its Ni and Tf", notes, warnings)
     if to in GLTF_SHAPED:
         params = {"base_color": sf["transmittance"], "metallic": 0.0, "roughness": 0.01}
         notes.append("glTF: KHR_materials_transmission 1 and KHR_materials_ior; roughness 0.01 (the model's "
@@ -823,6 +820,15 @@ TEXTURE_SLOTS = {"map_Kd": {"diffuse": "reflectance", "roughplastic": "diffuse_r
                             "blendbsdf-tir": "bsdf_1.specular_reflectance"}}
 
 
+def _dropped(stmt, value, why, notes, warnings):
+    """Say that the texture statement ``stmt`` (file ``value``) is dropped, and ``why``: a warning, as a user
+    sees it go, or a note for those of :data:`plausible.conversion.mtl.NOTED_TEXTURES`."""
+    from .mtl import NOTED_TEXTURES
+
+    (notes if stmt in NOTED_TEXTURES else warnings).append(f"{stmt} {value}: dropped, carried by reference only "
+                                                           f"({why})")
+
+
 def _with_textures(d, family, textures, notes, warn):
     """``(dict, bakes)``: ``d`` with its slots' bitmaps (:data:`TEXTURE_SLOTS`) and the bakes ``Kd x
     map_Kd`` (:attr:`Converted.bakes`: slot -> (statement, fitted colour)); a texture no slot takes is
@@ -830,11 +836,9 @@ def _with_textures(d, family, textures, notes, warn):
     import copy
 
     from . import mitsuba as CM
-    from .mtl import NOTED_TEXTURES
 
     def dropped(stmt, where):
-        (notes if stmt in NOTED_TEXTURES else warn).append(
-            f"{stmt} {textures[stmt]}: dropped, carried by reference only (no {where} takes it)")
+        _dropped(stmt, textures[stmt], f"no {where} takes it", notes, warn)
 
     bakes = {}
     d = copy.deepcopy(d)
