@@ -234,21 +234,15 @@ def _float(words):
 
 
 def _number(where, key, words, lo, hi) -> float:
-    try:
-        v = float(words[0]) if len(words) == 1 else math.nan
-    except ValueError:
-        v = math.nan
-    if not (lo <= v <= hi):
+    v = _float(words)
+    if v is None or not lo <= v <= hi:
         raise ValueError(f"{where}: {key} must be one number in [{lo:g}, {hi:g}], got {' '.join(words)!r}")
     return v
 
 
 def _illum(where, words):
-    try:
-        x = float(words[0]) if len(words) == 1 else math.nan
-    except ValueError:
-        x = math.nan
-    n = int(x) if math.isfinite(x) and x == int(x) else None      # "2" and "2.0" (Tinkercad writes 0.0)
+    x = _float(words)
+    n = int(x) if x is not None and x == int(x) else None      # "2" and "2.0" (Tinkercad writes 0.0)
     if n is None:
         raise ValueError(f"{where}: illum must be one integer (0-10), got {' '.join(words)!r}")
     if n not in ILLUM:
