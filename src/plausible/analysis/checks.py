@@ -129,6 +129,10 @@ def guard_albedos(model, wis, n: int = GUARD_SAMPLES, seed: int = 11):
     return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)
 
 
+#: :func:`energy`'s ``problem`` when the caller did not test the values.
+_UNTESTED = object()
+
+
 def value_problem(model, wis, seed: int = 5):
     """What makes ``f`` no BRDF, seen at the incidences ``wis`` on stratified outgoing directions
     (:func:`stratified_directions`, 8 x 16 and a grazing ring): a value that is not finite or one below
@@ -158,7 +162,7 @@ def value_problem(model, wis, seed: int = 5):
 
 
 def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
-           guard: bool | None = None, progress=None, results=None) -> PropertyResult:
+           guard: bool | None = None, progress=None, results=None, problem=_UNTESTED) -> PropertyResult:
     """Max directional albedo over a grid of incidence directions (azimuths too
     for anisotropic models), by default from the normal to ``cos(theta) = 1e-9``;
     passes when ``max a <= 1 + tol``.  ``tol`` matches the
@@ -177,13 +181,16 @@ def energy(model, *, thetas_deg=ENERGY_THETAS, phis_deg=None, tol: float = 1e-4,
     ``progress``: a :mod:`plausible.progress` factory, ticked per direction.
     ``results``: the albedos (:func:`~plausible.integrals.albedo.albedos`) of the
     directions of :func:`energy_directions`, if the caller computed them
-    (:func:`plausible.check` does, together with the sampling check's)."""
-    thetas_deg = A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)    # 90: no incidence
+    (:func:`plausible.check` does, together with the sampling check's); ``problem``: what
+    :func:`value_problem` found at those incidences (or more), None for nothing, if the caller
+    tested them (:func:`plausible.check` does, once for energy and sampling)."""
+    A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)     # 90: no incidence (checked, kept as given)
     A.real("tol", tol, 0.0)
     dirs = energy_directions(model, thetas_deg, phis_deg)
     tick = start(progress, len(dirs), f"energy {model.name}")
     wis = [direction(math.radians(t), math.radians(p)) for t, p in dirs]
-    problem = value_problem(model, wis)
+    if problem is _UNTESTED:
+        problem = value_problem(model, wis)
     if problem is not None:
         tick(len(dirs))
         return PropertyResult("energy", False, math.nan, f"<= 1 + {tol:g} (max directional albedo)",
@@ -252,7 +259,7 @@ def sampling_consistency(model, *, thetas_deg=(0, 30, 60, 80, 89), phis_deg=(0, 
     theta inner), if the caller computed them (:func:`plausible.check` does, with
     the energy check's albedos); else they are computed here.
     """
-    thetas_deg = A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)
+    A.angles_deg("thetas_deg", thetas_deg, 0.0, 90.0, open_hi=True)
     n_samples = A.count("n_samples", n_samples, 1)
     rng = np.random.default_rng(seed)
     if is_isotropic(model):
